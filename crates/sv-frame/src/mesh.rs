@@ -1,0 +1,304 @@
+//! The secondary (hub) quad mesh.
+
+use std::collections::HashMap;
+
+use sv_geom::{is_finite_point, quad_diagonal_distance, Point3, Real, Vector3};
+
+use crate::MeshError;
+
+/// A quad mesh in mm. Faces list four vertex indices counter-clockwise seen from the
+/// side the hub normals point to (`n = (v0 - v2) x (v1 - v3)`).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct QuadMesh {
+    /// Vertex positions (mm).
+    pub vertices: Vec<Point3>,
+    /// Faces as vertex indices.
+    pub faces: Vec<[usize; 4]>,
+}
+
+/// Tolerances for [`QuadMesh::validate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshChecks {
+    /// Largest allowed diagonal distance / mean edge of a face. Meshes made planar in a
+    /// CAD tool reach 1e-3 easily; the default 0.01 catches faces that were never planarised.
+    pub planarity_tolerance: Real,
+}
+
+impl MeshChecks {
+    /// Default planarity tolerance (diagonal distance / mean edge).
+    pub const DEFAULT_PLANARITY_TOLERANCE: Real = 0.01;
+}
+
+impl Default for MeshChecks {
+    fn default() -> Self {
+        Self {
+            planarity_tolerance: Self::DEFAULT_PLANARITY_TOLERANCE,
+        }
+    }
+}
+
+/// An interior edge shared by two faces, oriented as `faces[0]` lists it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Link {
+    /// The two faces (units).
+    pub faces: [usize; 2],
+    /// The edge `(v, w)` in the order `faces[0]` lists it.
+    pub edge: [usize; 2],
+    /// Position `k` of the edge in each face: face `f` lists it as `(f[k], f[k+1])`.
+    /// Side `k` of a unit's primary tile and hub corner `k` face this link.
+    pub slots: [usize; 2],
+}
+
+impl QuadMesh {
+    /// A flat `nx` x `ny` grid of squares of side `spacing` in the XY plane, normals +Z.
+    pub fn grid(nx: usize, ny: usize, spacing: Real) -> Self {
+        Self::from_fn(nx, ny, |i, j| {
+            Point3::new(i as Real * spacing, j as Real * spacing, 0.0)
+        })
+    }
+
+    /// A `nx` x `ny` face grid whose vertex `(i, j)` (`0 <= i <= nx`, `0 <= j <= ny`) is
+    /// `position(i, j)`; faces are counter-clockwise in `(i, j)`.
+    pub fn from_fn(nx: usize, ny: usize, position: impl Fn(usize, usize) -> Point3) -> Self {
+        let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
+        for j in 0..=ny {
+            for i in 0..=nx {
+                vertices.push(position(i, j));
+            }
+        }
+        let id = |i: usize, j: usize| j * (nx + 1) + i;
+        let mut faces = Vec::with_capacity(nx * ny);
+        for j in 0..ny {
+            for i in 0..nx {
+                faces.push([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        Self { vertices, faces }
+    }
+
+    /// A translational surface `z = f(x) + g(y)` sampled on a square grid: its faces are
+    /// exactly planar for any `f`, `g` (opposite edges are translates of each other).
+    pub fn translational(
+        nx: usize,
+        ny: usize,
+        spacing: Real,
+        f: impl Fn(Real) -> Real,
+        g: impl Fn(Real) -> Real,
+    ) -> Self {
+        let (x0, y0) = (nx as Real * spacing / 2.0, ny as Real * spacing / 2.0);
+        Self::from_fn(nx, ny, |i, j| {
+            let (x, y) = (i as Real * spacing - x0, j as Real * spacing - y0);
+            Point3::new(x, y, f(x) + g(y))
+        })
+    }
+
+    /// A cap of a sphere of radius `radius` around its top, meshed by its curvature lines
+    /// (meridians and parallels of a band around an equator through the top), so faces are
+    /// planar isosceles trapezoids and vertices conical. Edge length about `spacing`.
+    pub fn sphere_cap(nx: usize, ny: usize, radius: Real, spacing: Real) -> Self {
+        let step = spacing / radius;
+        let (u0, v0) = (nx as Real * step / 2.0, ny as Real * step / 2.0);
+        Self::from_fn(nx, ny, |i, j| {
+            let lon = i as Real * step - u0;
+            let lat = j as Real * step - v0;
+            // point on the band around the equator in the XZ plane through the top
+            let p = Vector3::new(lat.cos() * lon.sin(), lat.sin(), lat.cos() * lon.cos());
+            Point3::from(p * radius - Vector3::new(0.0, 0.0, radius))
+        })
+    }
+
+    /// Mean edge length over all face edges (each interior edge counted twice).
+    pub fn mean_edge(&self) -> Real {
+        let mut sum = 0.0;
+        let mut n = 0usize;
+        for f in &self.faces {
+            for k in 0..4 {
+                if let (Some(a), Some(b)) = (self.vertices.get(f[k]), self.vertices.get(f[(k + 1) % 4])) {
+                    sum += (a - b).norm();
+                    n += 1;
+                }
+            }
+        }
+        if n == 0 {
+            0.0
+        } else {
+            sum / n as Real
+        }
+    }
+
+    /// The four corner positions of face `f` (indices must be valid).
+    pub fn face_points(&self, f: usize) -> [Point3; 4] {
+        self.faces[f].map(|v| self.vertices[v])
+    }
+
+    /// Interior edges with the two faces on them. Call after [`QuadMesh::validate`].
+    pub fn links(&self) -> Vec<Link> {
+        let mut by_edge: HashMap<(usize, usize), (usize, usize)> = HashMap::new();
+        let mut links = Vec::new();
+        for (f, face) in self.faces.iter().enumerate() {
+            for k in 0..4 {
+                let (v, w) = (face[k], face[(k + 1) % 4]);
+                if let Some(&(g, m)) = by_edge.get(&(w, v)) {
+                    links.push(Link {
+                        faces: [g, f],
+                        edge: [w, v],
+                        slots: [m, k],
+                    });
+                } else {
+                    by_edge.insert((v, w), (f, k));
+                }
+            }
+        }
+        links.sort_by_key(|l| (l.faces[0], l.faces[1]));
+        links
+    }
+
+    /// Check everything a frame needs: finite coordinates, indices in range, no degenerate
+    /// faces, manifold and consistently oriented edges, planar faces, at least one link.
+    pub fn validate(&self, checks: &MeshChecks) -> Result<(), MeshError> {
+        if self.faces.is_empty() {
+            return Err(MeshError::Empty);
+        }
+        if let Some(v) = self.vertices.iter().position(|p| !is_finite_point(p)) {
+            return Err(MeshError::NonFinite { vertex: v });
+        }
+        let count = self.vertices.len();
+        for (f, face) in self.faces.iter().enumerate() {
+            if let Some(&index) = face.iter().find(|&&i| i >= count) {
+                return Err(MeshError::IndexOutOfRange { face: f, index, count });
+            }
+        }
+        let scale = self.mean_edge();
+        let eps = 1e-9 * scale.max(1e-300);
+        for (f, face) in self.faces.iter().enumerate() {
+            let p = self.face_points(f);
+            for k in 0..4 {
+                for m in (k + 1)..4 {
+                    if face[k] == face[m] {
+                        return Err(MeshError::DegenerateFace {
+                            face: f,
+                            why: format!("vertex {} is used twice", face[k]),
+                        });
+                    }
+                }
+                if (p[k] - p[(k + 1) % 4]).norm() <= eps {
+                    return Err(MeshError::DegenerateFace {
+                        face: f,
+                        why: format!("edge ({}, {}) has zero length", face[k], face[(k + 1) % 4]),
+                    });
+                }
+            }
+            let area2 = (p[0] - p[2]).cross(&(p[1] - p[3])).norm();
+            if area2 <= 1e-6 * scale * scale {
+                return Err(MeshError::DegenerateFace {
+                    face: f,
+                    why: "zero area".into(),
+                });
+            }
+        }
+        let mut directed: HashMap<(usize, usize), usize> = HashMap::new();
+        for face in &self.faces {
+            for k in 0..4 {
+                let e = (face[k], face[(k + 1) % 4]);
+                *directed.entry(e).or_default() += 1;
+            }
+        }
+        let mut keys: Vec<_> = directed.iter().collect();
+        keys.sort();
+        for (&(v, w), &n) in keys {
+            if n > 1 {
+                let why = if directed.contains_key(&(w, v)) {
+                    "used by more than two faces".to_string()
+                } else {
+                    "two faces list it in the same direction (inconsistent orientation)".to_string()
+                };
+                return Err(MeshError::NonManifoldEdge { v, w, why });
+            }
+        }
+        for (f, face) in self.faces.iter().enumerate() {
+            let p = self.face_points(f);
+            let mean = (0..4).map(|k| (p[k] - p[(k + 1) % 4]).norm()).sum::<Real>() / 4.0;
+            let distance = quad_diagonal_distance(&p);
+            let ratio = distance / mean;
+            if ratio > checks.planarity_tolerance {
+                let _ = face;
+                return Err(MeshError::NonPlanar {
+                    face: f,
+                    distance,
+                    ratio,
+                    tolerance: checks.planarity_tolerance,
+                });
+            }
+        }
+        if self.links().is_empty() {
+            return Err(MeshError::TooSmall {
+                why: format!(
+                    "{} face(s) and no interior edge; a frame needs at least two units that share an edge",
+                    self.faces.len()
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_links_are_interior_edges() {
+        let m = QuadMesh::grid(3, 2, 100.0);
+        // interior edges of a 3x2 grid: 2*2 vertical + 3*1 horizontal
+        assert_eq!(m.links().len(), 7);
+        m.validate(&MeshChecks::default()).unwrap();
+        for l in m.links() {
+            let f = m.faces[l.faces[0]];
+            let g = m.faces[l.faces[1]];
+            assert_eq!([f[l.slots[0]], f[(l.slots[0] + 1) % 4]], l.edge);
+            assert_eq!([g[l.slots[1]], g[(l.slots[1] + 1) % 4]], [l.edge[1], l.edge[0]]);
+        }
+    }
+
+    #[test]
+    fn translational_and_sphere_faces_are_planar() {
+        let saddle = QuadMesh::translational(8, 8, 300.0, |x| x * x / 6000.0, |y| -y * y / 6000.0);
+        saddle.validate(&MeshChecks { planarity_tolerance: 1e-9 }).unwrap();
+        let cap = QuadMesh::sphere_cap(8, 8, 3000.0, 300.0);
+        cap.validate(&MeshChecks { planarity_tolerance: 1e-9 }).unwrap();
+        // the cap bulges up: the middle is higher than the corners
+        let top = cap.vertices[4 * 9 + 4].z;
+        assert!(top > cap.vertices[0].z + 100.0);
+    }
+
+    #[test]
+    fn bad_meshes_say_what_and_where() {
+        let mut m = QuadMesh::grid(2, 1, 100.0);
+        m.vertices[3].y = f64::NAN;
+        assert_eq!(m.validate(&Default::default()), Err(MeshError::NonFinite { vertex: 3 }));
+
+        let mut m = QuadMesh::grid(2, 1, 100.0);
+        m.faces[1][2] = 99;
+        assert!(matches!(m.validate(&Default::default()), Err(MeshError::IndexOutOfRange { face: 1, index: 99, .. })));
+
+        let mut m = QuadMesh::grid(2, 1, 100.0);
+        m.faces[0][3] = m.faces[0][0];
+        assert!(matches!(m.validate(&Default::default()), Err(MeshError::DegenerateFace { face: 0, .. })));
+
+        let mut m = QuadMesh::grid(2, 1, 100.0);
+        m.vertices[4].z = 30.0;
+        assert!(matches!(m.validate(&Default::default()), Err(MeshError::NonPlanar { face: 1, .. })));
+
+        let mut m = QuadMesh::grid(2, 1, 100.0);
+        m.faces[1].reverse();
+        assert!(matches!(m.validate(&Default::default()), Err(MeshError::NonManifoldEdge { .. })));
+
+        let mut m = QuadMesh::grid(2, 1, 100.0);
+        m.faces.push(m.faces[1]);
+        assert!(matches!(m.validate(&Default::default()), Err(MeshError::NonManifoldEdge { .. })));
+
+        let m = QuadMesh::grid(1, 1, 100.0);
+        assert!(matches!(m.validate(&Default::default()), Err(MeshError::TooSmall { .. })));
+        assert_eq!(QuadMesh::default().validate(&Default::default()), Err(MeshError::Empty));
+    }
+}
