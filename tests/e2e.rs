@@ -1,1 +1,19 @@
+//! End-to-end tests: the `spinvalence` binary run in fresh temporary directories on the
+//! fixtures in `fixtures/` and on bad input built from them.
 
+#[path = "e2e/util.rs"]
+mod util;
+
+#[path = "e2e/fixtures.rs"]
+mod fixtures;
+
+#[path = "e2e/bad_input.rs"]
+mod bad_input;
+#[path = "e2e/check.rs"]
+mod check;
+#[path = "e2e/cli.rs"]
+mod cli;
+#[path = "e2e/hygiene.rs"]
+mod hygiene;
+#[path = "e2e/solve.rs"]
+mod solve;

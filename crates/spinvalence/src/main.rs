@@ -1,1 +1,109 @@
-fn main() {}
+//! `spinvalence`: the command line of the Spin-Valence frame tools.
+//!
+//! Thin by design: parse arguments ([`cli`]), call the library crates, print, and map
+//! errors to exit codes. Exit codes: 0 success, 1 `check` found a violation, 2 bad input
+//! or usage. Every error is one line on stderr: `error: what and where`.
+
+mod check;
+mod cli;
+mod output;
+mod solve;
+
+use std::process::ExitCode;
+
+use anyhow::{bail, Result};
+use clap::error::ErrorKind;
+use clap::Parser;
+
+use cli::{Cli, Command};
+
+/// Exit code of a failed `check`.
+const EXIT_VIOLATION: u8 = 1;
+/// Exit code of bad input or usage.
+const EXIT_ERROR: u8 = 2;
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(err) => return clap_exit(err),
+    };
+    match run(&cli) {
+        Ok(code) => code,
+        Err(err) => {
+            eprintln!("error: {}", one_line(&err));
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
+}
+
+/// The error and its causes on one line, like `{:#}`, but without repeating a cause whose
+/// text its parent already contains (library errors often interpolate their source).
+fn one_line(err: &anyhow::Error) -> String {
+    let mut message = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if message.contains(&text) {
+            continue;
+        }
+        if !message.is_empty() {
+            message.push_str(": ");
+        }
+        message.push_str(&text);
+    }
+    message.replace(['\n', '\r'], " ")
+}
+
+fn run(cli: &Cli) -> Result<ExitCode> {
+    match &cli.command {
+        Command::Solve(args) => {
+            solve::run(args)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Check(args) => Ok(if check::run(args)? {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::from(EXIT_VIOLATION)
+        }),
+        Command::Build => bail!(
+            "`build` is not yet available (it lands with the build stage); \
+             for now run `spinvalence solve --mesh HUBS.obj --out DIR`"
+        ),
+    }
+}
+
+/// Help and version as clap prints them; usage errors as one line.
+fn clap_exit(err: clap::Error) -> ExitCode {
+    match err.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            let _ = err.print();
+            ExitCode::SUCCESS
+        }
+        ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            let _ = err.print();
+            ExitCode::from(EXIT_ERROR)
+        }
+        _ => {
+            let text = err.to_string();
+            let first = text.lines().next().unwrap_or("invalid arguments");
+            let first = first.strip_prefix("error: ").unwrap_or(first);
+            eprintln!("error: {first} (see --help)");
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_line_keeps_context_and_drops_repeated_causes() {
+        let mesh = sv_frame::MeshError::Empty;
+        let io = sv_io::IoError::Mesh {
+            file: "m.obj".into(),
+            problem: mesh,
+        };
+        let err = anyhow::Error::new(io).context("reading\nthe mesh");
+        assert_eq!(one_line(&err), "reading the mesh: m.obj: mesh has no faces");
+    }
+}

@@ -77,14 +77,14 @@ pub enum FrameError {
         why: &'static str,
     },
     /// A unit failed to deploy (should not happen inside the solver's bounds).
-    #[error("unit {unit} (face {face}): {source}")]
+    #[error("unit {unit} (face {face}): {cause}")]
     Unit {
         /// Unit index.
         unit: usize,
         /// Face index.
         face: usize,
-        /// Cause.
-        source: sv_unit::UnitError,
+        /// Cause (in the message; not a `source`, so chains print it once).
+        cause: sv_unit::UnitError,
     },
     /// The sparse factorisation failed (internal; please report).
     #[error("internal: sparse solve failed: {0}")]

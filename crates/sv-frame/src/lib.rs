@@ -24,10 +24,12 @@ mod solve;
 
 pub use check::{check_frame, CheckOptions, CheckReport, CheckRow};
 pub use error::{FrameError, MeshError};
-pub use file::{FrameFile, FrameParams, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT};
+pub use file::{
+    FrameFile, FrameParams, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT,
+};
 pub use hub::{hubs_from_mesh, Hub};
 pub use mesh::{Link, MeshChecks, QuadMesh};
 pub use solve::{
     evaluate, solve, Evaluation, Progress, SidePolicy, SolveOptions, SolveReport, Solved,
-    DEFAULT_SPIN_ANGLE,
+    DEFAULT_SPIN_ANGLE, STALL_WINDOW,
 };

@@ -113,7 +113,9 @@ impl QuadMesh {
         let mut n = 0usize;
         for f in &self.faces {
             for k in 0..4 {
-                if let (Some(a), Some(b)) = (self.vertices.get(f[k]), self.vertices.get(f[(k + 1) % 4])) {
+                if let (Some(a), Some(b)) =
+                    (self.vertices.get(f[k]), self.vertices.get(f[(k + 1) % 4]))
+                {
                     sum += (a - b).norm();
                     n += 1;
                 }
@@ -153,6 +155,57 @@ impl QuadMesh {
         links
     }
 
+    /// Planarity of every face: diagonal distance / mean edge of the face.
+    pub fn planarity_residuals(&self) -> Vec<Real> {
+        (0..self.faces.len())
+            .map(|f| {
+                let p = self.face_points(f);
+                let mean = (0..4).map(|k| (p[k] - p[(k + 1) % 4]).norm()).sum::<Real>() / 4.0;
+                quad_diagonal_distance(&p) / mean
+            })
+            .collect()
+    }
+
+    /// Conical residual (rad) at every interior vertex with four faces around it:
+    /// `|w1 - w2 + w3 - w4|`, the face angles at the vertex taken in cyclic order
+    /// (Pottmann and Wallner's angle balance; zero exactly for a conical vertex).
+    pub fn conical_residuals(&self) -> Vec<(usize, Real)> {
+        // per vertex: (face, angle at the vertex, incoming neighbour, outgoing neighbour)
+        let mut around: HashMap<usize, Vec<(Real, usize, usize)>> = HashMap::new();
+        for face in &self.faces {
+            for k in 0..4 {
+                let v = face[k];
+                let (i, o) = (face[(k + 3) % 4], face[(k + 1) % 4]);
+                let p = self.vertices[v];
+                let (a, b) = (self.vertices[i] - p, self.vertices[o] - p);
+                let angle = a.angle(&b);
+                around.entry(v).or_default().push((angle, i, o));
+            }
+        }
+        let mut out = Vec::new();
+        for (v, fans) in around {
+            if fans.len() != 4 {
+                continue;
+            }
+            // walk: the next face's incoming neighbour is this face's outgoing one
+            let mut order = vec![0usize];
+            while order.len() < 4 {
+                let last = fans[*order.last().unwrap_or(&0)];
+                match fans.iter().position(|f| f.1 == last.2) {
+                    Some(next) if !order.contains(&next) => order.push(next),
+                    _ => break,
+                }
+            }
+            if order.len() != 4 || fans[order[3]].2 != fans[order[0]].1 {
+                continue; // boundary vertex or not a closed fan
+            }
+            let w: Vec<Real> = order.iter().map(|&i| fans[i].0).collect();
+            out.push((v, (w[0] - w[1] + w[2] - w[3]).abs()));
+        }
+        out.sort_by_key(|&(v, _)| v);
+        out
+    }
+
     /// Check everything a frame needs: finite coordinates, indices in range, no degenerate
     /// faces, manifold and consistently oriented edges, planar faces, at least one link.
     pub fn validate(&self, checks: &MeshChecks) -> Result<(), MeshError> {
@@ -165,7 +218,11 @@ impl QuadMesh {
         let count = self.vertices.len();
         for (f, face) in self.faces.iter().enumerate() {
             if let Some(&index) = face.iter().find(|&&i| i >= count) {
-                return Err(MeshError::IndexOutOfRange { face: f, index, count });
+                return Err(MeshError::IndexOutOfRange {
+                    face: f,
+                    index,
+                    count,
+                });
             }
         }
         let scale = self.mean_edge();
@@ -215,13 +272,12 @@ impl QuadMesh {
                 return Err(MeshError::NonManifoldEdge { v, w, why });
             }
         }
-        for (f, face) in self.faces.iter().enumerate() {
+        for f in 0..self.faces.len() {
             let p = self.face_points(f);
             let mean = (0..4).map(|k| (p[k] - p[(k + 1) % 4]).norm()).sum::<Real>() / 4.0;
             let distance = quad_diagonal_distance(&p);
             let ratio = distance / mean;
             if ratio > checks.planarity_tolerance {
-                let _ = face;
                 return Err(MeshError::NonPlanar {
                     face: f,
                     distance,
@@ -256,49 +312,104 @@ mod tests {
             let f = m.faces[l.faces[0]];
             let g = m.faces[l.faces[1]];
             assert_eq!([f[l.slots[0]], f[(l.slots[0] + 1) % 4]], l.edge);
-            assert_eq!([g[l.slots[1]], g[(l.slots[1] + 1) % 4]], [l.edge[1], l.edge[0]]);
+            assert_eq!(
+                [g[l.slots[1]], g[(l.slots[1] + 1) % 4]],
+                [l.edge[1], l.edge[0]]
+            );
         }
     }
 
     #[test]
     fn translational_and_sphere_faces_are_planar() {
         let saddle = QuadMesh::translational(8, 8, 300.0, |x| x * x / 6000.0, |y| -y * y / 6000.0);
-        saddle.validate(&MeshChecks { planarity_tolerance: 1e-9 }).unwrap();
+        saddle
+            .validate(&MeshChecks {
+                planarity_tolerance: 1e-9,
+            })
+            .unwrap();
         let cap = QuadMesh::sphere_cap(8, 8, 3000.0, 300.0);
-        cap.validate(&MeshChecks { planarity_tolerance: 1e-9 }).unwrap();
+        cap.validate(&MeshChecks {
+            planarity_tolerance: 1e-9,
+        })
+        .unwrap();
         // the cap bulges up: the middle is higher than the corners
         let top = cap.vertices[4 * 9 + 4].z;
         assert!(top > cap.vertices[0].z + 100.0);
     }
 
     #[test]
+    fn sphere_net_is_conical_and_grid_is_planar() {
+        let cap = QuadMesh::sphere_cap(6, 6, 3000.0, 300.0);
+        let con = cap.conical_residuals();
+        assert_eq!(con.len(), 25);
+        assert!(con.iter().all(|&(_, r)| r < 1e-9), "{con:?}");
+        // a translational saddle is planar but not conical
+        let saddle = QuadMesh::translational(6, 6, 300.0, |x| x * x / 3000.0, |y| -y * y / 3000.0);
+        assert!(saddle.planarity_residuals().iter().all(|&r| r < 1e-9));
+        let worst = saddle
+            .conical_residuals()
+            .iter()
+            .map(|c| c.1)
+            .fold(0.0, f64::max);
+        assert!(worst > 1e-3, "{worst}");
+    }
+
+    #[test]
     fn bad_meshes_say_what_and_where() {
         let mut m = QuadMesh::grid(2, 1, 100.0);
         m.vertices[3].y = f64::NAN;
-        assert_eq!(m.validate(&Default::default()), Err(MeshError::NonFinite { vertex: 3 }));
+        assert_eq!(
+            m.validate(&Default::default()),
+            Err(MeshError::NonFinite { vertex: 3 })
+        );
 
         let mut m = QuadMesh::grid(2, 1, 100.0);
         m.faces[1][2] = 99;
-        assert!(matches!(m.validate(&Default::default()), Err(MeshError::IndexOutOfRange { face: 1, index: 99, .. })));
+        assert!(matches!(
+            m.validate(&Default::default()),
+            Err(MeshError::IndexOutOfRange {
+                face: 1,
+                index: 99,
+                ..
+            })
+        ));
 
         let mut m = QuadMesh::grid(2, 1, 100.0);
         m.faces[0][3] = m.faces[0][0];
-        assert!(matches!(m.validate(&Default::default()), Err(MeshError::DegenerateFace { face: 0, .. })));
+        assert!(matches!(
+            m.validate(&Default::default()),
+            Err(MeshError::DegenerateFace { face: 0, .. })
+        ));
 
         let mut m = QuadMesh::grid(2, 1, 100.0);
-        m.vertices[4].z = 30.0;
-        assert!(matches!(m.validate(&Default::default()), Err(MeshError::NonPlanar { face: 1, .. })));
+        m.vertices[5].z = 30.0;
+        assert!(matches!(
+            m.validate(&Default::default()),
+            Err(MeshError::NonPlanar { face: 1, .. })
+        ));
 
         let mut m = QuadMesh::grid(2, 1, 100.0);
         m.faces[1].reverse();
-        assert!(matches!(m.validate(&Default::default()), Err(MeshError::NonManifoldEdge { .. })));
+        assert!(matches!(
+            m.validate(&Default::default()),
+            Err(MeshError::NonManifoldEdge { .. })
+        ));
 
         let mut m = QuadMesh::grid(2, 1, 100.0);
         m.faces.push(m.faces[1]);
-        assert!(matches!(m.validate(&Default::default()), Err(MeshError::NonManifoldEdge { .. })));
+        assert!(matches!(
+            m.validate(&Default::default()),
+            Err(MeshError::NonManifoldEdge { .. })
+        ));
 
         let m = QuadMesh::grid(1, 1, 100.0);
-        assert!(matches!(m.validate(&Default::default()), Err(MeshError::TooSmall { .. })));
-        assert_eq!(QuadMesh::default().validate(&Default::default()), Err(MeshError::Empty));
+        assert!(matches!(
+            m.validate(&Default::default()),
+            Err(MeshError::TooSmall { .. })
+        ));
+        assert_eq!(
+            QuadMesh::default().validate(&Default::default()),
+            Err(MeshError::Empty)
+        );
     }
 }

@@ -50,7 +50,9 @@ pub fn centroid(points: &[Point3]) -> Option<Point3> {
     if points.is_empty() {
         return None;
     }
-    let sum = points.iter().fold(Vector3::zeros(), |acc, p| acc + p.coords);
+    let sum = points
+        .iter()
+        .fold(Vector3::zeros(), |acc, p| acc + p.coords);
     Some(Point3::from(sum / points.len() as Real))
 }
 

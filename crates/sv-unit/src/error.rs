@@ -29,7 +29,9 @@ pub enum UnitError {
         phi: f64,
     },
     /// Derivatives are unbounded on the edge of the domain (P ~ sqrt(theta)).
-    #[error("derivatives are unbounded at the domain boundary (theta = {theta:.6}, phi = {phi:.6})")]
+    #[error(
+        "derivatives are unbounded at the domain boundary (theta = {theta:.6}, phi = {phi:.6})"
+    )]
     OnBoundary {
         /// Rotation angle.
         theta: f64,

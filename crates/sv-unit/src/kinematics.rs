@@ -270,8 +270,8 @@ pub fn primary_in_hub_frame(
         d_theta: [Vector3::zeros(); 4],
         d_phi: [Vector3::zeros(); 4],
     };
-    for i in 0..4 {
-        let w = rs[i] * expansion - c.p;
+    for (i, ri) in rs.iter().enumerate() {
+        let w = ri * expansion - c.p;
         out.corners[i] = Point3::from(rt * w);
         out.d_theta[i] = r_th.transpose() * w - rt * p_th;
         out.d_phi[i] = r_ph.transpose() * w - rt * p_ph;
@@ -374,7 +374,8 @@ pub fn inverse(
             });
         }
     }
-    let best = best.ok_or_else(|| not(format!("theta = {theta:.6}, phi = {phi:.6} is infeasible")))?;
+    let best =
+        best.ok_or_else(|| not(format!("theta = {theta:.6}, phi = {phi:.6} is infeasible")))?;
     if best.residual > tolerance {
         return Err(not(format!(
             "hub misses the closed-form deployment by {:.3e} mm (tolerance {tolerance:.1e})",

@@ -1,0 +1,148 @@
+//! The command line: clap types only, no work.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use sv_frame::{MeshChecks, SidePolicy, SolveOptions};
+
+const MAIN_EXAMPLES: &str = "\
+Examples:
+  spinvalence solve --mesh fixtures/sphere_cap.obj --out out/cap
+  spinvalence check out/cap/frame.json
+
+Lengths are millimetres, Z is up, angles on the command line are degrees.
+Exit codes: 0 success, 1 `check` found a violation, 2 bad input or usage.";
+
+const SOLVE_EXAMPLES: &str = "\
+Examples:
+  # a flat 4 x 3 grid of 300 mm squares, default spin angle 45 degrees
+  spinvalence solve --mesh fixtures/grid_small.obj --out out/small
+
+  # a sphere cap, tiles 2 % larger than the model tiles, for a script
+  spinvalence solve --mesh fixtures/sphere_cap.obj --expansion 1.02 --out out/cap --quiet
+
+  # a saddle with every hub on the side its face normal points to
+  spinvalence solve --mesh fixtures/saddle.obj --side normal --out out/saddle
+
+Writes DIR/frame.json and DIR/frame.obj, both or neither.";
+
+const CHECK_EXAMPLES: &str = "\
+Examples:
+  spinvalence check out/cap/frame.json
+  spinvalence check out/cap/frame.json && echo frame ok
+
+Exit code 0 when every check passes, 1 when one fails, 2 when the file cannot be read.";
+
+/// Spin-Valence kirigami space frames: from a quad mesh of hubs to a deployed frame.
+#[derive(Debug, Parser)]
+#[command(name = "spinvalence", version, after_help = MAIN_EXAMPLES, arg_required_else_help = true)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Deploy a quad mesh of hubs: solve every unit's (theta, phi) so the primary tiles meet.
+    #[command(after_help = SOLVE_EXAMPLES)]
+    Solve(SolveArgs),
+    /// Re-verify every invariant of a frame.json and print a table.
+    #[command(after_help = CHECK_EXAMPLES)]
+    Check(CheckArgs),
+    /// Build the built-in default frame into ./out (not yet available: lands with the build stage).
+    Build,
+}
+
+/// `spinvalence solve`.
+#[derive(Debug, Args)]
+pub struct SolveArgs {
+    /// Quad mesh of hubs: OBJ in mm, planar quads listed counter-clockwise seen from the hub side.
+    #[arg(long, value_name = "HUBS.obj")]
+    pub mesh: PathBuf,
+    /// Spin angle of the hubs in degrees, strictly between 0 and 90 (45 for a square grid).
+    // 45 = sv_frame::DEFAULT_SPIN_ANGLE in degrees (a test keeps the two equal).
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 45.0,
+        allow_negative_numbers = true
+    )]
+    pub spin_angle: f64,
+    /// Expansion factor e >= 1 of the physical primary tiles about their centroids.
+    #[arg(
+        long,
+        value_name = "E",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
+    pub expansion: f64,
+    /// Which side of its primary tile each hub goes to.
+    #[arg(long, value_enum, default_value_t = SideArg::Auto)]
+    pub side: SideArg,
+    /// Largest allowed face non-planarity: diagonal distance / mean edge of the face.
+    #[arg(long, value_name = "X", default_value_t = MeshChecks::DEFAULT_PLANARITY_TOLERANCE,
+          allow_negative_numbers = true)]
+    pub planarity_tolerance: f64,
+    /// Largest number of solver iterations.
+    #[arg(long, value_name = "N", default_value_t = SolveOptions::default().max_iterations)]
+    pub max_iterations: usize,
+    /// Output directory (created if missing); receives frame.json and frame.obj.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Print nothing but errors: no progress bar, no summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// `--side`, the command-line face of [`SidePolicy`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SideArg {
+    /// Per unit, hubs on the concave side (shorter distances); flat parts keep the mesh normal.
+    Auto,
+    /// Every hub on the side its face normal points to.
+    Normal,
+    /// Every hub on the side opposite to its face normal.
+    Opposite,
+}
+
+impl From<SideArg> for SidePolicy {
+    fn from(side: SideArg) -> Self {
+        match side {
+            SideArg::Auto => SidePolicy::Auto,
+            SideArg::Normal => SidePolicy::Normal,
+            SideArg::Opposite => SidePolicy::Opposite,
+        }
+    }
+}
+
+/// `spinvalence check`.
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// A frame.json written by `spinvalence solve`.
+    #[arg(value_name = "FRAME.json")]
+    pub frame: PathBuf,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn cli_is_well_formed() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn default_spin_angle_matches_the_library() {
+        let cli =
+            Cli::try_parse_from(["spinvalence", "solve", "--mesh", "m.obj", "--out", "o"]).unwrap();
+        let Command::Solve(args) = cli.command else {
+            panic!("expected solve")
+        };
+        assert!((args.spin_angle.to_radians() - sv_frame::DEFAULT_SPIN_ANGLE).abs() < 1e-15);
+        assert_eq!(SidePolicy::from(args.side), SolveOptions::default().side);
+    }
+}

@@ -1,0 +1,256 @@
+//! Files and terminal output: atomic writes, one-line I/O errors, aligned tables.
+
+use std::fs;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{anyhow, Context, Result};
+use tempfile::NamedTempFile;
+
+/// A short, lowercase description of an I/O error.
+pub fn io_message(err: &io::Error) -> String {
+    match err.kind() {
+        io::ErrorKind::NotFound => "no such file or directory".into(),
+        io::ErrorKind::PermissionDenied => "permission denied".into(),
+        io::ErrorKind::IsADirectory => "is a directory, not a file".into(),
+        io::ErrorKind::NotADirectory => "a path component is a file, not a directory".into(),
+        io::ErrorKind::AlreadyExists => "already exists".into(),
+        io::ErrorKind::StorageFull => "no space left on the device".into(),
+        io::ErrorKind::ReadOnlyFilesystem => "read-only file system".into(),
+        _ => {
+            let text = err.to_string();
+            let mut chars = text.chars();
+            match chars.next() {
+                Some(first) => first.to_lowercase().chain(chars).collect(),
+                None => text,
+            }
+        }
+    }
+}
+
+/// Read a whole file; errors name the file.
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    fs::read(path).map_err(|e| anyhow!("{}: {}", path.display(), io_message(&e)))
+}
+
+/// Read a text file; a file that is not UTF-8 is an error naming the line it breaks on.
+pub fn read_text(path: &Path) -> Result<String> {
+    let bytes = read_bytes(path)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = 1 + e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count();
+        anyhow!(
+            "{}:{}: not a text file (invalid UTF-8 at byte {})",
+            path.display(),
+            line,
+            at
+        )
+    })
+}
+
+/// Files that appear in a directory all together or not at all.
+///
+/// [`AtomicFiles::create`] makes one hidden temporary file per target up front (so an
+/// unwritable directory fails before any long computation); [`AtomicFiles::commit`] writes
+/// and syncs them all, then renames them into place, the last one last. Dropping an
+/// uncommitted set removes the temporary files.
+pub struct AtomicFiles {
+    dir: PathBuf,
+    pending: Vec<(NamedTempFile, PathBuf)>,
+}
+
+impl AtomicFiles {
+    /// Create `dir` if needed and one temporary file in it for each of `names`.
+    pub fn create(dir: &Path, names: &[&str]) -> Result<Self> {
+        fs::create_dir_all(dir).map_err(|e| {
+            anyhow!(
+                "cannot create output directory {}: {}",
+                dir.display(),
+                io_message(&e)
+            )
+        })?;
+        let mut pending = Vec::with_capacity(names.len());
+        for name in names {
+            let prefix = format!(".{name}.");
+            let mut builder = tempfile::Builder::new();
+            builder.prefix(&prefix).suffix(".tmp");
+            // Like any new file (umask applies), not the private 0600 of a temporary file.
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::PermissionsExt;
+                builder.permissions(fs::Permissions::from_mode(0o666));
+            }
+            let temp = builder.tempfile_in(dir).map_err(|e| {
+                anyhow!(
+                    "output directory {} is not writable: {}",
+                    dir.display(),
+                    io_message(&e)
+                )
+            })?;
+            pending.push((temp, dir.join(name)));
+        }
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            pending,
+        })
+    }
+
+    /// Write `contents[i]` to the `i`-th file and move all of them into place.
+    pub fn commit(self, contents: &[&str]) -> Result<Vec<PathBuf>> {
+        assert_eq!(contents.len(), self.pending.len(), "one content per file");
+        let mut pending = self.pending;
+        for ((temp, target), text) in pending.iter_mut().zip(contents) {
+            let file = temp.as_file_mut();
+            file.write_all(text.as_bytes())
+                .and_then(|()| file.sync_all())
+                .map_err(|e| anyhow!("{}: {}", target.display(), io_message(&e)))?;
+        }
+        let mut done: Vec<PathBuf> = Vec::with_capacity(pending.len());
+        for (temp, target) in pending {
+            if let Err(e) = temp.persist(&target) {
+                for path in &done {
+                    let _ = fs::remove_file(path);
+                }
+                return Err(anyhow!("{}: {}", target.display(), io_message(&e.error)));
+            }
+            done.push(target);
+        }
+        // Make the renames durable; not every platform can sync a directory.
+        if let Ok(dir) = fs::File::open(&self.dir) {
+            let _ = dir.sync_all();
+        }
+        Ok(done)
+    }
+}
+
+/// Print to stdout; a closed pipe (`| head`) is not an error.
+pub fn print_out(text: &str) -> Result<()> {
+    let mut out = io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != io::ErrorKind::BrokenPipe => {
+            Err(e).context("writing to standard output")
+        }
+        _ => Ok(()),
+    }
+}
+
+/// A number for a table: fixed point in the readable range, scientific outside it.
+pub fn number(x: f64) -> String {
+    if x == 0.0 {
+        "0".into()
+    } else if !x.is_finite() {
+        format!("{x}")
+    } else if (1e-3..1e6).contains(&x.abs()) {
+        format!("{x:.3}")
+    } else {
+        format!("{x:.2e}")
+    }
+}
+
+/// Rows of cells as text, each column padded to its widest cell.
+pub fn table(rows: &[Vec<String>]) -> String {
+    let columns = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let widths: Vec<usize> = (0..columns)
+        .map(|c| {
+            rows.iter()
+                .filter_map(|r| r.get(c))
+                .map(|s| s.chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut text = String::new();
+    for row in rows {
+        let mut line = String::new();
+        for (c, cell) in row.iter().enumerate() {
+            if c > 0 {
+                line.push_str("  ");
+            }
+            line.push_str(cell);
+            let pad = widths[c] - cell.chars().count();
+            line.extend(std::iter::repeat_n(' ', pad));
+        }
+        text.push_str(line.trim_end());
+        text.push('\n');
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_short_and_keep_small_values() {
+        assert_eq!(number(0.0), "0");
+        assert_eq!(number(12.3456), "12.346");
+        assert_eq!(number(1.5e-9), "1.50e-9");
+        assert_eq!(number(f64::NAN), "NaN");
+    }
+
+    #[test]
+    fn table_aligns_columns() {
+        let rows = vec![
+            vec!["a".to_string(), "1".to_string()],
+            vec!["long".to_string(), "22".to_string()],
+        ];
+        assert_eq!(table(&rows), "a     1\nlong  22\n");
+    }
+
+    #[test]
+    fn atomic_files_appear_together_and_leave_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("new");
+        let files = AtomicFiles::create(&out, &["a.txt", "b.txt"]).unwrap();
+        assert_eq!(
+            fs::read_dir(&out).unwrap().count(),
+            2,
+            "temporary files exist"
+        );
+        files.commit(&["A", "B"]).unwrap();
+        let mut names: Vec<_> = fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.txt", "b.txt"]);
+        assert_eq!(fs::read_to_string(out.join("b.txt")).unwrap(), "B");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn atomic_files_get_the_permissions_of_any_new_file() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        AtomicFiles::create(dir.path(), &["a.txt"])
+            .unwrap()
+            .commit(&["A"])
+            .unwrap();
+        fs::write(dir.path().join("plain.txt"), "P").unwrap();
+        let mode = |name: &str| {
+            fs::metadata(dir.path().join(name))
+                .unwrap()
+                .permissions()
+                .mode()
+                & 0o777
+        };
+        assert_eq!(mode("a.txt"), mode("plain.txt"));
+    }
+
+    #[test]
+    fn dropped_atomic_files_leave_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = AtomicFiles::create(dir.path(), &["a.txt"]).unwrap();
+        drop(files);
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn invalid_utf8_names_the_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.obj");
+        fs::write(&path, b"v 0 0 0\nv 1 \xff 0\n").unwrap();
+        let err = format!("{:#}", read_text(&path).unwrap_err());
+        assert!(err.contains("bad.obj:2:"), "{err}");
+    }
+}
