@@ -2,6 +2,8 @@
 
 CARGO ?= cargo
 
+export PROPTEST_RNG_SEED ?= 20261122
+
 .PHONY: test toolchain fmt-check clippy unit-tests bench fixtures
 
 ## Everything CI checks: formatting, lints (warnings denied), unit, integration, e2e and doc tests.

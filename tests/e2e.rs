@@ -9,6 +9,8 @@ mod fixtures;
 
 #[path = "e2e/bad_input.rs"]
 mod bad_input;
+#[path = "e2e/build.rs"]
+mod build;
 #[path = "e2e/check.rs"]
 mod check;
 #[path = "e2e/cli.rs"]

@@ -1,4 +1,4 @@
-//! Help, version, usage errors and the not-yet-available `build`.
+//! Help, version and usage errors.
 
 use crate::util::Dir;
 
@@ -61,19 +61,4 @@ fn no_arguments_show_the_help() {
     let out = Dir::new().run(&[]);
     out.expect_code(2);
     assert!(out.stderr.contains("Usage:"), "{out:?}");
-}
-
-#[test]
-fn build_is_not_yet_available_and_writes_nothing() {
-    let dir = Dir::new();
-    let out = dir.run(&["build"]);
-    out.expect_code(2);
-    assert!(
-        out.one_error_line().contains("not yet available"),
-        "{out:?}"
-    );
-    assert!(
-        dir.entries("").is_empty(),
-        "build must not write anything yet"
-    );
 }

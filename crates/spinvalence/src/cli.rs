@@ -51,8 +51,53 @@ pub enum Command {
     /// Re-verify every invariant of a frame.json and print a table.
     #[command(after_help = CHECK_EXAMPLES)]
     Check(CheckArgs),
-    /// Build the built-in default frame into ./out (not yet available: lands with the build stage).
-    Build,
+    /// Target surface to deployed frame: hub mesh, primary solve, files in DIR (default ./out).
+    #[command(after_help = BUILD_EXAMPLES)]
+    Build(BuildArgs),
+}
+
+const BUILD_EXAMPLES: &str = "\
+Examples:
+  # the built-in pavilion (about 6 x 4 m) with 300 mm units into ./out
+  spinvalence build
+
+  # your own surface (OBJ or STL triangle mesh in mm), 250 mm units
+  spinvalence build --target roof.stl --unit-size 250 --out out/roof
+
+  # every parameter from a file, the unit size overridden on the command line
+  spinvalence build --config build.toml --unit-size 200
+
+Built-in targets: builtin:flat, builtin:vault, builtin:dome, builtin:saddle, builtin:pavilion.
+Writes DIR/mesh.obj (hub mesh), frame.json, frame.obj, report.json and timings.json, all or
+nothing. `spinvalence build --print-config` prints a config file with every default.";
+
+/// `spinvalence build`.
+#[derive(Debug, Args)]
+pub struct BuildArgs {
+    /// TOML file with every parameter (see `--print-config`); flags override it.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Target surface: an OBJ/STL triangle mesh in mm, or builtin:NAME.
+    #[arg(long, value_name = "FILE|builtin:NAME")]
+    pub target: Option<String>,
+    /// Unit (face) side in mm (default 300).
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    pub unit_size: Option<f64>,
+    /// Spin angle of the hubs in degrees (default 45).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub spin_angle: Option<f64>,
+    /// Expansion factor e >= 1 of the physical primary tiles (default 1).
+    #[arg(long, value_name = "E", allow_negative_numbers = true)]
+    pub expansion: Option<f64>,
+    /// Output directory (default ./out).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print a config file with every default and exit.
+    #[arg(long)]
+    pub print_config: bool,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 /// `spinvalence solve`.

@@ -4,14 +4,16 @@
 //! errors to exit codes. Exit codes: 0 success, 1 `check` found a violation, 2 bad input
 //! or usage. Every error is one line on stderr: `error: what and where`.
 
+mod build;
 mod check;
 mod cli;
+mod config;
 mod output;
 mod solve;
 
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::error::ErrorKind;
 use clap::Parser;
 
@@ -64,10 +66,14 @@ fn run(cli: &Cli) -> Result<ExitCode> {
         } else {
             ExitCode::from(EXIT_VIOLATION)
         }),
-        Command::Build => bail!(
-            "`build` is not yet available (it lands with the build stage); \
-             for now run `spinvalence solve --mesh HUBS.obj --out DIR`"
-        ),
+        Command::Build(args) => {
+            if args.print_config {
+                output::print_out(&config::default_toml())?;
+            } else {
+                build::run(args)?;
+            }
+            Ok(ExitCode::SUCCESS)
+        }
     }
 }
 

@@ -56,7 +56,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     // Fail on an unwritable output directory before the long part.
     let files = AtomicFiles::create(&args.out, &[FRAME_OBJ, FRAME_JSON])?;
 
-    let bar = progress_bar(args.quiet, options.max_iterations);
+    let bar = progress_bar(args.quiet, options.max_iterations, "solving");
     let solved = sv_frame::solve(&mesh, &options, &mut |p: Progress| {
         bar.set_length(p.max_iterations as u64);
         bar.set_position(p.iteration as u64);
@@ -105,20 +105,21 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     Ok(())
 }
 
-fn seconds(d: Duration) -> String {
+/// Seconds with three decimals.
+pub fn seconds(d: Duration) -> String {
     format!("{:.3} s", d.as_secs_f64())
 }
 
 /// A bar on stderr, hidden for `--quiet` and when stderr is not a terminal.
-fn progress_bar(quiet: bool, max_iterations: usize) -> ProgressBar {
+pub fn progress_bar(quiet: bool, max_iterations: usize, what: &str) -> ProgressBar {
     if quiet || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
     }
     let bar =
         ProgressBar::with_draw_target(Some(max_iterations as u64), ProgressDrawTarget::stderr());
-    if let Ok(style) =
-        ProgressStyle::with_template("solving [{bar:30}] {pos}/{len} iterations, {msg} ({elapsed})")
-    {
+    if let Ok(style) = ProgressStyle::with_template(&format!(
+        "{what} [{{bar:30}}] {{pos}}/{{len}} iterations, {{msg}} ({{elapsed}})"
+    )) {
         bar.set_style(style.progress_chars("=> "));
     }
     bar

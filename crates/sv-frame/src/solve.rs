@@ -49,8 +49,11 @@ pub struct SolveOptions {
     pub expansion: Real,
     /// Side choice.
     pub side: SidePolicy,
-    /// Axis case for every unit.
-    pub axis_case: AxisCase,
+    /// Axis case of every unit, or `None` to choose per unit: the two cases are the same
+    /// motion at `phi = 0` (the start), so each unit takes the case whose tilt lowers the
+    /// gaps fastest there. Default: the paper's case (`t . r1 = 0`) for every unit, which
+    /// reached lower gap sums than the per-unit choice on sphere caps.
+    pub axis_case: Option<AxisCase>,
     /// Largest number of Levenberg-Marquardt iterations.
     pub max_iterations: usize,
     /// Stop a phase when the cost fell by less than this fraction over the last
@@ -67,7 +70,7 @@ impl Default for SolveOptions {
             spin_angle: DEFAULT_SPIN_ANGLE,
             expansion: 1.0,
             side: SidePolicy::Auto,
-            axis_case: AxisCase::OrthogonalToR1,
+            axis_case: Some(AxisCase::OrthogonalToR1),
             max_iterations: 50,
             tolerance: 1e-3,
             planarity_tolerance: crate::MeshChecks::DEFAULT_PLANARITY_TOLERANCE,
@@ -149,7 +152,7 @@ pub fn solve(
         .map(|f| Deployment {
             theta: options.spin_angle.clamp(THETA_BOUNDS.0, THETA_BOUNDS.1),
             phi: 0.0,
-            case: options.axis_case,
+            case: options.axis_case.unwrap_or_default(),
             side: sides[f],
         })
         .collect();
@@ -158,6 +161,9 @@ pub fn solve(
         links: &links,
         expansion: options.expansion,
     };
+    if options.axis_case.is_none() {
+        choose_cases(&problem, &mut deployments)?;
+    }
     let start = problem.gaps(&deployments)?;
     let gap_sum_start: Real = start.iter().sum();
     let mut lm = Lm::new(&problem)?;
@@ -320,6 +326,42 @@ fn choose_sides(hubs: &[Hub], links: &[Link], policy: SidePolicy) -> Vec<Side> {
     }
 }
 
+/// At `phi = 0` both axis cases give the same unit; their tilts differ. Give each unit
+/// the case whose tilt has the larger least-squares gradient, i.e. the tilt that closes
+/// its gaps fastest.
+fn choose_cases(problem: &Problem, deps: &mut [Deployment]) -> Result<(), FrameError> {
+    let n = deps.len();
+    let weights = vec![1.0; problem.links.len()];
+    let mut slope = [vec![0.0; n], vec![0.0; n]];
+    for (c, case) in [AxisCase::OrthogonalToR1, AxisCase::OrthogonalToR2]
+        .into_iter()
+        .enumerate()
+    {
+        let trial: Vec<Deployment> = deps
+            .iter()
+            .map(|d| Deployment {
+                case,
+                phi: 0.0,
+                ..*d
+            })
+            .collect();
+        let mut grad = vec![0.0; 2 * n];
+        let mut diag = vec![[0.0; 3]; n];
+        let mut off = vec![[0.0; 4]; problem.links.len()];
+        problem.linearise(&trial, &weights, &mut grad, &mut diag, &mut off)?;
+        // gradient scaled by the curvature along phi: the decrease a Newton step would give
+        for u in 0..n {
+            slope[c][u] = grad[2 * u + 1] * grad[2 * u + 1] / diag[u][2].max(1e-300);
+        }
+    }
+    for (u, d) in deps.iter_mut().enumerate() {
+        if d.phi == 0.0 && slope[1][u] > slope[0][u] {
+            d.case = AxisCase::OrthogonalToR2;
+        }
+    }
+    Ok(())
+}
+
 struct Problem<'a> {
     hubs: &'a [Hub],
     links: &'a [Link],
@@ -356,6 +398,82 @@ impl Problem<'_> {
                 primary_world(&self.hubs[f], d, self.expansion).map_err(|e| self.unit_error(f, e))
             })
             .collect()
+    }
+
+    /// Gradient and Gauss-Newton blocks of `sum w_l |r_l|^2 / 2` at `deps`: per unit the
+    /// upper triangle of its 2x2 diagonal block, per link its off-diagonal 2x2 block (rows
+    /// of the smaller unit index).
+    fn linearise(
+        &self,
+        deps: &[Deployment],
+        weights: &[Real],
+        grad: &mut [Real],
+        diag: &mut [[Real; 3]],
+        off: &mut [[Real; 4]],
+    ) -> Result<(), FrameError> {
+        let p = self;
+        // corners and their Jacobians
+        let jac: Vec<_> = deps
+            .iter()
+            .enumerate()
+            .map(|(f, d)| {
+                let hub = &p.hubs[f];
+                primary_in_hub_frame(&hub.rhombus, d, p.expansion)
+                    .map(|j| {
+                        (
+                            j.corners.map(|q| hub.to_world(&q)),
+                            j.d_theta.map(|v| hub.frame * v),
+                            j.d_phi.map(|v| hub.frame * v),
+                        )
+                    })
+                    .map_err(|e| p.unit_error(f, e))
+            })
+            .collect::<Result<_, _>>()?;
+        grad.iter_mut().for_each(|g| *g = 0.0);
+        diag.iter_mut().for_each(|d| *d = [0.0; 3]);
+        for (li, l) in p.links.iter().enumerate() {
+            let [f, g] = l.faces;
+            let [k, m] = l.slots;
+            let (cf, tf, pf) = &jac[f];
+            let (cg, tg, pg) = &jac[g];
+            let c = segment_closest(&cf[k], &cf[(k + 1) % 4], &cg[m], &cg[(m + 1) % 4]);
+            let (s, t) = (c.s, c.t);
+            let (dp, dq) = (cf[(k + 1) % 4] - cf[k], cg[(m + 1) % 4] - cg[m]);
+            let r: Vector3 = (cf[k] + dp * s) - (cg[m] + dq * t);
+            let lerp = |a: &Vector3, b: &Vector3, u: Real| a * (1.0 - u) + b * u;
+            // Variable projection (Kaufman): the closest points slide along the sides
+            // where their parameters are free, so the directions they can slide in
+            // are projected out of the residual's Jacobian.
+            let basis = sliding_basis(&[(s, dp), (t, dq)]);
+            let project = |v: Vector3| basis.iter().fold(v, |v, e| v - e * e.dot(&v));
+            // columns: theta_f, phi_f, theta_g, phi_g
+            let cols = [
+                project(lerp(&tf[k], &tf[(k + 1) % 4], s)),
+                project(lerp(&pf[k], &pf[(k + 1) % 4], s)),
+                project(-lerp(&tg[m], &tg[(m + 1) % 4], t)),
+                project(-lerp(&pg[m], &pg[(m + 1) % 4], t)),
+            ];
+            let r = project(r);
+            let w = weights[li];
+            let var = [2 * f, 2 * f + 1, 2 * g, 2 * g + 1];
+            for a in 0..4 {
+                grad[var[a]] += w * cols[a].dot(&r);
+            }
+            let jj = |a: usize, b: usize| w * cols[a].dot(&cols[b]);
+            diag[f][0] += jj(0, 0);
+            diag[f][1] += jj(0, 1);
+            diag[f][2] += jj(1, 1);
+            diag[g][0] += jj(2, 2);
+            diag[g][1] += jj(2, 3);
+            diag[g][2] += jj(3, 3);
+            // off-diagonal block rows of the smaller index
+            off[li] = if f < g {
+                [jj(0, 2), jj(0, 3), jj(1, 2), jj(1, 3)]
+            } else {
+                [jj(2, 0), jj(2, 1), jj(3, 0), jj(3, 1)]
+            };
+        }
+        Ok(())
     }
 
     fn gaps(&self, deps: &[Deployment]) -> Result<Vec<Real>, FrameError> {
@@ -529,67 +647,7 @@ impl<'a> Lm<'a> {
             if it >= STALL_WINDOW && history[it - STALL_WINDOW] - measure <= tolerance * measure {
                 return Ok(it);
             }
-            // corners and their Jacobians
-            let jac: Vec<_> = deps
-                .iter()
-                .enumerate()
-                .map(|(f, d)| {
-                    let hub = &p.hubs[f];
-                    primary_in_hub_frame(&hub.rhombus, d, p.expansion)
-                        .map(|j| {
-                            (
-                                j.corners.map(|q| hub.to_world(&q)),
-                                j.d_theta.map(|v| hub.frame * v),
-                                j.d_phi.map(|v| hub.frame * v),
-                            )
-                        })
-                        .map_err(|e| p.unit_error(f, e))
-                })
-                .collect::<Result<_, _>>()?;
-            grad.iter_mut().for_each(|g| *g = 0.0);
-            diag.iter_mut().for_each(|d| *d = [0.0; 3]);
-            for (li, l) in p.links.iter().enumerate() {
-                let [f, g] = l.faces;
-                let [k, m] = l.slots;
-                let (cf, tf, pf) = &jac[f];
-                let (cg, tg, pg) = &jac[g];
-                let c = segment_closest(&cf[k], &cf[(k + 1) % 4], &cg[m], &cg[(m + 1) % 4]);
-                let (s, t) = (c.s, c.t);
-                let (dp, dq) = (cf[(k + 1) % 4] - cf[k], cg[(m + 1) % 4] - cg[m]);
-                let r: Vector3 = (cf[k] + dp * s) - (cg[m] + dq * t);
-                let lerp = |a: &Vector3, b: &Vector3, u: Real| a * (1.0 - u) + b * u;
-                // Variable projection (Kaufman): the closest points slide along the sides
-                // where their parameters are free, so the directions they can slide in
-                // are projected out of the residual's Jacobian.
-                let basis = sliding_basis(&[(s, dp), (t, dq)]);
-                let project = |v: Vector3| basis.iter().fold(v, |v, e| v - e * e.dot(&v));
-                // columns: theta_f, phi_f, theta_g, phi_g
-                let cols = [
-                    project(lerp(&tf[k], &tf[(k + 1) % 4], s)),
-                    project(lerp(&pf[k], &pf[(k + 1) % 4], s)),
-                    project(-lerp(&tg[m], &tg[(m + 1) % 4], t)),
-                    project(-lerp(&pg[m], &pg[(m + 1) % 4], t)),
-                ];
-                let r = project(r);
-                let w = weights[li];
-                let var = [2 * f, 2 * f + 1, 2 * g, 2 * g + 1];
-                for a in 0..4 {
-                    grad[var[a]] += w * cols[a].dot(&r);
-                }
-                let jj = |a: usize, b: usize| w * cols[a].dot(&cols[b]);
-                diag[f][0] += jj(0, 0);
-                diag[f][1] += jj(0, 1);
-                diag[f][2] += jj(1, 1);
-                diag[g][0] += jj(2, 2);
-                diag[g][1] += jj(2, 3);
-                diag[g][2] += jj(3, 3);
-                // off-diagonal block rows of the smaller index
-                off[li] = if f < g {
-                    [jj(0, 2), jj(0, 3), jj(1, 2), jj(1, 3)]
-                } else {
-                    [jj(2, 0), jj(2, 1), jj(3, 0), jj(3, 1)]
-                };
-            }
+            p.linearise(deps, &weights, &mut grad, &mut diag, &mut off)?;
             let gnorm = grad.iter().map(|g| g.abs()).fold(0.0, Real::max);
             if gnorm <= 1e-14 * (1.0 + cost) {
                 return Ok(it);

@@ -95,3 +95,19 @@ fn progress_is_reported() {
     .unwrap();
     assert!(calls >= s.report.iterations);
 }
+
+#[test]
+fn per_unit_axis_case_keeps_every_invariant() {
+    let mesh = QuadMesh::translational(6, 6, 300.0, |x| x * x / 5000.0, |y| -y * y / 9000.0);
+    let s = gaps_of(
+        &mesh,
+        &SolveOptions {
+            axis_case: None,
+            ..Default::default()
+        },
+    );
+    assert!(s.report.gap_sum < s.report.gap_sum_start);
+    let file = s.to_frame_file(&mesh);
+    let report = crate::check_frame(&file, &Default::default());
+    assert!(report.ok(), "{report:#?}");
+}

@@ -49,7 +49,12 @@ fn case_with(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(4000))]
+    // fixed seed: a failure reproduces on every machine
+    #![proptest_config(ProptestConfig {
+        cases: 4000,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x5eed_5eed),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn legs_equal_sides((rh, dep) in unit_case()) {
@@ -160,8 +165,10 @@ proptest! {
         for i in 0..4 {
             let fd_t = (tp[i] - tm[i]) / (2.0 * h);
             let fd_p = (pp[i] - pm[i]) / (2.0 * h);
-            let tol = 1e-5 * rh.side();
-            prop_assert!((fd_t - j.d_theta[i]).norm() < tol, "d/dtheta {i}: {fd_t:?} vs {:?}", j.d_theta[i]);
+            // central differences are accurate to about 1e-6 of the derivative's own size
+            let tol_t = 1e-5 * rh.side().max(j.d_theta[i].norm());
+            let tol = 1e-5 * rh.side().max(j.d_phi[i].norm());
+            prop_assert!((fd_t - j.d_theta[i]).norm() < tol_t, "d/dtheta {i}: {fd_t:?} vs {:?}", j.d_theta[i]);
             prop_assert!((fd_p - j.d_phi[i]).norm() < tol, "d/dphi {i}: {fd_p:?} vs {:?}", j.d_phi[i]);
         }
     }

@@ -1,0 +1,220 @@
+//! `spinvalence build`: target surface -> hub mesh -> deployed frame, end to end.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{anyhow, bail, Result};
+use indicatif::ProgressBar;
+use serde::Serialize;
+use sv_frame::Progress;
+use sv_surface::{SecondaryReport, TargetMesh};
+
+use crate::cli::BuildArgs;
+use crate::config::{self, BuildConfig};
+use crate::output::{self, number, AtomicFiles};
+use crate::solve::{progress_bar, seconds};
+
+/// The files `build` writes; `frame.json` last.
+const FILES: [&str; 5] = [
+    "mesh.obj",
+    "frame.obj",
+    "timings.json",
+    "report.json",
+    "frame.json",
+];
+
+/// Wall seconds per stage (`timings.json`); later stages add their own keys.
+#[derive(Debug, Serialize)]
+pub struct Timings {
+    /// Target surface to hub mesh.
+    pub secondary: f64,
+    /// Primary-surface solve.
+    pub primary: f64,
+    /// The whole command, reading and writing included.
+    pub total: f64,
+}
+
+/// The config after the command line has overridden the file.
+pub fn resolve(args: &BuildArgs) -> Result<BuildConfig> {
+    let mut cfg = match &args.config {
+        Some(path) => {
+            let text = output::read_text(path)?;
+            config::parse(&text, &path.display().to_string())?
+        }
+        None => BuildConfig::default(),
+    };
+    if let Some(target) = &args.target {
+        cfg.target = target.clone();
+    }
+    if let Some(size) = args.unit_size {
+        cfg.secondary.unit_size = size;
+    }
+    if let Some(spin) = args.spin_angle {
+        cfg.primary.spin_angle_deg = spin;
+    }
+    if let Some(e) = args.expansion {
+        cfg.primary.expansion = e;
+    }
+    if let Some(out) = &args.out {
+        cfg.out = out.clone();
+    }
+    let size = cfg.secondary.unit_size;
+    if !(size.is_finite() && size > 0.0) {
+        bail!("invalid unit size {size}: must be a positive length in mm");
+    }
+    cfg.secondary.check().map_err(|e| anyhow!("{e}"))?;
+    cfg.primary.to_solve_options()?;
+    Ok(cfg)
+}
+
+/// Load `builtin:NAME` or an OBJ/STL triangle mesh.
+pub fn load_target(spec: &str) -> Result<TargetMesh> {
+    if let Some(name) = spec.strip_prefix("builtin:") {
+        return sv_surface::builtin_target(name).map_err(|e| anyhow!("{e}"));
+    }
+    let path = Path::new(spec);
+    let bytes = output::read_bytes(path)?;
+    let mesh = sv_io::read_tri_mesh(&bytes, spec)?;
+    Ok(TargetMesh {
+        vertices: mesh.vertices,
+        triangles: mesh.triangles,
+    })
+}
+
+/// Run `build`. Nothing is written unless every stage succeeded.
+pub fn run(args: &BuildArgs) -> Result<()> {
+    let started = Instant::now();
+    let cfg = resolve(args)?;
+    let solve_options = cfg.primary.to_solve_options()?;
+    let target = load_target(&cfg.target)?;
+    let files = AtomicFiles::create(&cfg.out, &FILES)?;
+
+    let t0 = Instant::now();
+    let bar = progress_bar(args.quiet, cfg.secondary.max_iterations, "hub mesh");
+    let secondary = sv_surface::build_secondary(&target, &cfg.secondary, &mut |it, energy| {
+        bar.set_position(it as u64);
+        bar.set_message(format!("residual {energy:.3e}"));
+    });
+    bar.finish_and_clear();
+    let (mesh, report) = secondary.map_err(|e| anyhow!("{}: {e}", cfg.target))?;
+    let secondary_s = t0.elapsed().as_secs_f64();
+
+    let t1 = Instant::now();
+    let bar = progress_bar(args.quiet, solve_options.max_iterations, "primary");
+    let solved = sv_frame::solve(&mesh, &solve_options, &mut |p: Progress| {
+        bar.set_position(p.iteration as u64);
+        bar.set_message(format!("gap sum {} mm", number(p.gap_sum)));
+    });
+    finish(&bar);
+    let solved = solved.map_err(|e| anyhow!("{}: primary solve: {e}", cfg.target))?;
+    let primary_s = t1.elapsed().as_secs_f64();
+
+    let frame = solved.to_frame_file(&mesh);
+    let header = format!("spinvalence hub mesh of {}, mm, Z up", cfg.target);
+    let mesh_obj = sv_io::write_quad_obj(&mesh, &header);
+    let frame_obj = sv_io::frame_to_obj(&frame);
+    let frame_json = sv_io::frame_to_json(&frame);
+    let report_json = serde_json::to_string_pretty(&report)?;
+    let timings = Timings {
+        secondary: secondary_s,
+        primary: primary_s,
+        total: started.elapsed().as_secs_f64(),
+    };
+    let timings_json = serde_json::to_string_pretty(&timings)?;
+    let written = files.commit(&[
+        &mesh_obj,
+        &frame_obj,
+        &timings_json,
+        &report_json,
+        &frame_json,
+    ])?;
+
+    if !args.quiet {
+        let overlaps = &solved.evaluation.overlaps;
+        let min = overlaps.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = overlaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let unit = report.mean_edge;
+        let rows = summary_rows(&cfg, &report, unit, &solved.report, (min, max), &timings);
+        let mut rows = rows;
+        rows.push(vec![
+            "wrote".into(),
+            written
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+        ]);
+        output::print_out(&output::table(&rows))?;
+    }
+    Ok(())
+}
+
+fn finish(bar: &ProgressBar) {
+    bar.finish_and_clear();
+}
+
+fn summary_rows(
+    cfg: &BuildConfig,
+    s: &SecondaryReport,
+    unit: f64,
+    p: &sv_frame::SolveReport,
+    overlap: (f64, f64),
+    t: &Timings,
+) -> Vec<Vec<String>> {
+    let mm = |x: f64| format!("{} mm", number(x));
+    let rows: Vec<[String; 2]> = vec![
+        ["target".into(), cfg.target.clone()],
+        ["units".into(), s.faces.to_string()],
+        ["mean edge".into(), mm(unit)],
+        [
+            "planarity max".into(),
+            format!("{:.5} (diagonal distance / edge)", s.planarity_max),
+        ],
+        [
+            "conical residual max".into(),
+            format!("{:.3} deg", s.conical_max_deg),
+        ],
+        [
+            "distance to target max".into(),
+            format!(
+                "{} ({:.2} % of the edge)",
+                mm(s.closeness_max * unit),
+                100.0 * s.closeness_max
+            ),
+        ],
+        [
+            "boundary distance max".into(),
+            format!(
+                "{} ({:.2} % of the edge)",
+                mm(s.boundary_max * unit),
+                100.0 * s.boundary_max
+            ),
+        ],
+        [
+            "target area covered".into(),
+            format!("{:.1} %", 100.0 * s.coverage),
+        ],
+        [
+            "faces with edge ratio <= 1.25".into(),
+            format!("{:.1} %", 100.0 * s.edge_ratio_fraction),
+        ],
+        ["gap max".into(), mm(p.gap_max)],
+        [
+            "gap sum".into(),
+            format!("{} -> {}", mm(p.gap_sum_start), mm(p.gap_sum)),
+        ],
+        [
+            "hub overlap".into(),
+            format!("{} .. {}", mm(overlap.0), mm(overlap.1)),
+        ],
+        [
+            "time secondary / primary".into(),
+            format!("{:.3} s / {:.3} s", t.secondary, t.primary),
+        ],
+        [
+            "time total".into(),
+            seconds(std::time::Duration::from_secs_f64(t.total)),
+        ],
+    ];
+    rows.into_iter().map(|r| r.to_vec()).collect()
+}

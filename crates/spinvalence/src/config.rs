@@ -1,0 +1,202 @@
+//! `spinvalence build --config FILE`: every parameter of the build in one TOML file.
+//!
+//! ```toml
+//! target = "builtin:pavilion"   # or a path to an OBJ/STL triangle mesh in mm
+//! out = "out"
+//!
+//! [secondary]                   # the hub mesh (sv_surface::SecondaryOptions)
+//! unit_size = 300.0
+//! planarity_weight = 1.0
+//!
+//! [primary]                     # the deployment (sv_frame::SolveOptions)
+//! spin_angle_deg = 45.0
+//! expansion = 1.0
+//! side = "auto"
+//! ```
+//!
+//! Unknown keys are errors (a typo must not silently fall back to a default). Command-line
+//! flags override the file.
+
+use std::path::PathBuf;
+
+use anyhow::{anyhow, bail, Result};
+use serde::{Deserialize, Serialize};
+use sv_frame::{SidePolicy, SolveOptions};
+use sv_surface::SecondaryOptions;
+
+/// Default output directory of `build`.
+pub const DEFAULT_OUT: &str = "out";
+
+/// The whole build configuration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BuildConfig {
+    /// `builtin:NAME` or a path to an OBJ/STL triangle mesh (mm, Z up).
+    pub target: String,
+    /// Output directory.
+    pub out: PathBuf,
+    /// Secondary (hub) mesh options.
+    pub secondary: SecondaryOptions,
+    /// Primary-surface solve options.
+    pub primary: PrimaryConfig,
+}
+
+impl Default for BuildConfig {
+    fn default() -> Self {
+        Self {
+            target: format!("builtin:{}", sv_surface::DEFAULT_BUILTIN),
+            out: PathBuf::from(DEFAULT_OUT),
+            secondary: SecondaryOptions::default(),
+            primary: PrimaryConfig::default(),
+        }
+    }
+}
+
+/// `[primary]`: the deployment, in user units (degrees).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PrimaryConfig {
+    /// Spin angle of the hubs (degrees, strictly between 0 and 90).
+    pub spin_angle_deg: f64,
+    /// Expansion factor e >= 1 of the physical primary tiles.
+    pub expansion: f64,
+    /// `auto`, `normal` or `opposite`.
+    pub side: SidePolicy,
+    /// Largest number of solver iterations.
+    pub max_iterations: usize,
+    /// Stall tolerance of the solver (relative decrease over a few iterations).
+    pub tolerance: f64,
+    /// Largest face non-planarity accepted from the hub mesh (diagonal distance / mean edge).
+    pub planarity_tolerance: f64,
+}
+
+impl Default for PrimaryConfig {
+    fn default() -> Self {
+        let d = SolveOptions::default();
+        Self {
+            spin_angle_deg: d.spin_angle.to_degrees(),
+            expansion: d.expansion,
+            side: d.side,
+            max_iterations: d.max_iterations,
+            tolerance: d.tolerance,
+            planarity_tolerance: d.planarity_tolerance,
+        }
+    }
+}
+
+impl PrimaryConfig {
+    /// The solver options, with the parameters checked (one line each, naming the key).
+    pub fn to_solve_options(&self) -> Result<SolveOptions> {
+        let spin = self.spin_angle_deg;
+        if !(spin > 0.0 && spin < 90.0) {
+            bail!("invalid spin angle {spin}: must be strictly between 0 and 90 degrees");
+        }
+        let e = self.expansion;
+        if !(e.is_finite() && e >= 1.0) {
+            bail!("invalid expansion {e}: must be a finite number >= 1");
+        }
+        let tol = self.planarity_tolerance;
+        if !(tol.is_finite() && tol > 0.0) {
+            bail!("invalid primary.planarity_tolerance {tol}: must be a finite number > 0");
+        }
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+            bail!(
+                "invalid primary.tolerance {}: must be a finite number >= 0",
+                self.tolerance
+            );
+        }
+        Ok(SolveOptions {
+            spin_angle: spin.to_radians(),
+            expansion: e,
+            side: self.side,
+            max_iterations: self.max_iterations,
+            tolerance: self.tolerance,
+            planarity_tolerance: tol,
+            ..SolveOptions::default()
+        })
+    }
+}
+
+/// Parse a config file's text; errors are one line naming `name:line:column`.
+pub fn parse(text: &str, name: &str) -> Result<BuildConfig> {
+    toml::from_str(text).map_err(|e| {
+        let (line, column) = e
+            .span()
+            .map(|span| line_column(text, span.start))
+            .unwrap_or((1, 1));
+        let message = e.message().replace(['\n', '\r'], " ");
+        anyhow!("{name}:{line}:{column}: {}", message.trim_end_matches('.'))
+    })
+}
+
+/// 1-based line and column of a byte offset.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text.as_bytes()[..offset.min(text.len())];
+    let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+    let column = 1 + before.iter().rev().take_while(|&&b| b != b'\n').count();
+    (line, column)
+}
+
+/// A config file with every key at its default, for `docs/` and `--print-config`.
+pub fn default_toml() -> String {
+    toml::to_string_pretty(&BuildConfig::default()).unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_file_is_all_defaults() {
+        assert_eq!(parse("", "c.toml").unwrap(), BuildConfig::default());
+    }
+
+    #[test]
+    fn default_file_round_trips() {
+        let text = default_toml();
+        assert!(
+            text.contains("[secondary]") && text.contains("[primary]"),
+            "{text}"
+        );
+        assert_eq!(parse(&text, "c.toml").unwrap(), BuildConfig::default());
+    }
+
+    #[test]
+    fn keys_override_defaults() {
+        let c = parse(
+            "target = \"builtin:dome\"\n[secondary]\nunit_size = 250.0\n[primary]\nspin_angle_deg = 40\nside = \"normal\"\n",
+            "c.toml",
+        )
+        .unwrap();
+        assert_eq!(c.target, "builtin:dome");
+        assert_eq!(c.secondary.unit_size, 250.0);
+        assert_eq!(c.primary.spin_angle_deg, 40.0);
+        assert_eq!(c.primary.side, SidePolicy::Normal);
+        assert_eq!(c.primary.expansion, 1.0);
+    }
+
+    #[test]
+    fn typos_and_bad_values_name_the_place() {
+        let e = parse("[secondary]\nunit_sise = 250.0\n", "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("c.toml:2:"), "{e}");
+        assert!(e.contains("unit_sise"), "{e}");
+        let e = parse("[primary]\nspin_angle_deg = \"x\"\n", "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("c.toml:2:"), "{e}");
+        let e = parse("target = \n", "c.toml").unwrap_err().to_string();
+        assert!(e.starts_with("c.toml:1:"), "{e}");
+        assert!(!e.contains('\n'));
+        for (key, value) in [
+            ("spin_angle_deg", "90.0"),
+            ("spin_angle_deg", "0.0"),
+            ("expansion", "0.9"),
+            ("expansion", "nan"),
+        ] {
+            let c = parse(&format!("[primary]\n{key} = {value}\n"), "c.toml").unwrap();
+            assert!(c.primary.to_solve_options().is_err(), "{key} = {value}");
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! Stage 1 of Spin-Valence: a target surface becomes the secondary (hub) quad mesh of
+//! paper sec. 3.1, with planar, nearly square faces and conical vertices, close to the
+//! target and with its boundary on the target boundary.
+//!
+//! Core items:
+//! - [`TargetMesh`]: the design surface (triangles, mm, Z up), [`TargetMesh::validate`];
+//! - [`builtin_target`]: `flat`, `vault`, `dome`, `saddle`, `pavilion` (the default);
+//! - [`initial_grid`]: a quad grid at the unit size whose outer ring follows the boundary;
+//! - [`optimise`]: guided projection (Gauss-Newton with auxiliary normals and cone axes);
+//! - [`build_secondary`]: both in one call, returning the mesh and a [`SecondaryReport`].
+//!
+//! ```
+//! use sv_surface::{build_secondary, builtin_target, SecondaryOptions};
+//! let target = builtin_target("saddle").unwrap();
+//! let opts = SecondaryOptions { unit_size: 500.0, ..Default::default() };
+//! let (mesh, report) = build_secondary(&target, &opts, &mut |_, _| {}).unwrap();
+//! assert_eq!(mesh.faces.len(), report.faces);
+//! assert!(report.planarity_max < 0.01);
+//! ```
+
+mod builtin;
+mod error;
+mod optimise;
+mod options;
+mod param;
+mod report;
+mod sparse;
+mod target;
+mod topology;
+
+pub use builtin::{builtin_target, BUILTIN_NAMES, DEFAULT_BUILTIN};
+pub use error::SurfaceError;
+pub use optimise::optimise;
+pub use options::SecondaryOptions;
+pub use param::initial_grid;
+pub use report::{Goals, SecondaryReport, EDGE_RATIO_LIMIT};
+pub use target::TargetMesh;
+
+use sv_frame::QuadMesh;
+
+/// Target surface to optimised hub mesh: [`initial_grid`] then [`optimise`], validating the
+/// target once. `progress(iteration, energy)` is called after every iteration.
+pub fn build_secondary(
+    target: &TargetMesh,
+    opts: &SecondaryOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<(QuadMesh, SecondaryReport), SurfaceError> {
+    opts.check()?;
+    let index = target::TargetIndex::new(target)?;
+    let grid = param::initial_grid_indexed(&index, opts)?;
+    optimise::optimise_indexed(&index, grid, opts, progress)
+}

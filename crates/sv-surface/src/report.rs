@@ -1,0 +1,268 @@
+//! Quality figures of a hub mesh against its target.
+
+use serde::{Deserialize, Serialize};
+use sv_frame::QuadMesh;
+use sv_geom::{quad_diagonal_distance, Point3, Real};
+
+use crate::target::TargetIndex;
+use crate::topology::Topology;
+use crate::TargetMesh;
+
+/// Edge ratio (max edge / min edge of a face) counted as "nearly square".
+pub const EDGE_RATIO_LIMIT: Real = 1.25;
+
+/// Measured quality of a secondary (hub) mesh. Lengths are relative to the mesh's mean
+/// edge (the actual unit side), angles in degrees.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SecondaryReport {
+    /// Faces (units).
+    pub faces: usize,
+    /// Vertices.
+    pub vertices: usize,
+    /// Mean edge length (mm).
+    pub mean_edge: Real,
+    /// Largest diagonal distance / face mean edge.
+    pub planarity_max: Real,
+    /// Face with the largest planarity residual.
+    pub planarity_worst_face: usize,
+    /// Largest angle-balance residual `|w1 - w2 + w3 - w4| / 2` (degrees) over interior
+    /// valence-4 vertices, `w_k` the face angles in cyclic order.
+    pub conical_max_deg: Real,
+    /// Vertex with the largest conical residual.
+    pub conical_worst_vertex: usize,
+    /// Largest vertex distance to the target / mean edge.
+    pub closeness_max: Real,
+    /// Vertex farthest from the target.
+    pub closeness_worst_vertex: usize,
+    /// Largest boundary-vertex distance to the target boundary curve / mean edge.
+    pub boundary_max: Real,
+    /// Boundary vertex farthest from the boundary curve.
+    pub boundary_worst_vertex: usize,
+    /// Fraction of target area within 0.1 mean edge of the hub mesh (sampled at target
+    /// triangle centroids, area weighted).
+    pub coverage: Real,
+    /// Fraction of faces with max edge / min edge <= [`EDGE_RATIO_LIMIT`].
+    pub edge_ratio_fraction: Real,
+    /// Largest edge ratio of any face.
+    pub edge_ratio_max: Real,
+    /// Faces that are not strictly convex (an angle at or above 180 degrees).
+    pub non_convex_faces: Vec<usize>,
+    /// Gauss-Newton iterations run.
+    pub iterations: usize,
+    /// Goals not met, one line each naming the worst place. Empty when all goals hold.
+    pub unmet: Vec<String>,
+}
+
+/// Acceptance goals checked into [`SecondaryReport::unmet`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Goals {
+    /// Planarity max.
+    pub planarity: Real,
+    /// Conical residual max (degrees).
+    pub conical_deg: Real,
+    /// Closeness max (fraction of the mean edge).
+    pub closeness: Real,
+    /// Boundary distance max (fraction of the mean edge).
+    pub boundary: Real,
+    /// Covered fraction of target area.
+    pub coverage: Real,
+    /// Fraction of faces with edge ratio <= 1.25.
+    pub edge_ratio_fraction: Real,
+}
+
+impl Default for Goals {
+    /// The acceptance goals of issue 3.
+    fn default() -> Self {
+        Self {
+            planarity: 0.002,
+            conical_deg: 0.5,
+            closeness: 0.05,
+            boundary: 0.05,
+            coverage: 0.85,
+            edge_ratio_fraction: 0.95,
+        }
+    }
+}
+
+/// Angle-balance residual (radians) at each star of the mesh.
+pub(crate) fn conical_residuals(mesh: &QuadMesh, topo: &Topology) -> Vec<Real> {
+    topo.stars
+        .iter()
+        .map(|s| {
+            let v = mesh.vertices[s.vertex];
+            let w = s.faces.map(|(f, k)| {
+                let face = mesh.faces[f];
+                let a = mesh.vertices[face[(k + 1) % 4]] - v;
+                let b = mesh.vertices[face[(k + 3) % 4]] - v;
+                a.angle(&b)
+            });
+            (w[0] - w[1] + w[2] - w[3]).abs() / 2.0
+        })
+        .collect()
+}
+
+pub(crate) fn measure(
+    mesh: &QuadMesh,
+    topo: &Topology,
+    index: &TargetIndex<'_>,
+    iterations: usize,
+    goals: &Goals,
+) -> SecondaryReport {
+    let mean = mesh.mean_edge().max(1e-300);
+    let mut r = SecondaryReport {
+        faces: mesh.faces.len(),
+        vertices: mesh.vertices.len(),
+        mean_edge: mean,
+        planarity_max: 0.0,
+        planarity_worst_face: 0,
+        conical_max_deg: 0.0,
+        conical_worst_vertex: 0,
+        closeness_max: 0.0,
+        closeness_worst_vertex: 0,
+        boundary_max: 0.0,
+        boundary_worst_vertex: 0,
+        coverage: 0.0,
+        edge_ratio_fraction: 0.0,
+        edge_ratio_max: 0.0,
+        non_convex_faces: Vec::new(),
+        iterations,
+        unmet: Vec::new(),
+    };
+    let mut good = 0usize;
+    for (f, face) in mesh.faces.iter().enumerate() {
+        let p = mesh.face_points(f);
+        let e = [0, 1, 2, 3].map(|k| (p[(k + 1) % 4] - p[k]).norm());
+        let fm = e.iter().sum::<Real>() / 4.0;
+        let plan = quad_diagonal_distance(&p) / fm.max(1e-300);
+        if plan > r.planarity_max {
+            r.planarity_max = plan;
+            r.planarity_worst_face = f;
+        }
+        let ratio = e.iter().copied().fold(0.0, Real::max)
+            / e.iter()
+                .copied()
+                .fold(Real::INFINITY, Real::min)
+                .max(1e-300);
+        r.edge_ratio_max = r.edge_ratio_max.max(ratio);
+        if ratio <= EDGE_RATIO_LIMIT {
+            good += 1;
+        }
+        let n = (p[0] - p[2]).cross(&(p[1] - p[3]));
+        let convex = (0..4).all(|k| {
+            (p[(k + 1) % 4] - p[k])
+                .cross(&(p[(k + 2) % 4] - p[(k + 1) % 4]))
+                .dot(&n)
+                > 0.0
+        });
+        if !convex {
+            r.non_convex_faces.push(f);
+        }
+        let _ = face;
+    }
+    r.edge_ratio_fraction = good as Real / mesh.faces.len().max(1) as Real;
+    for (s, c) in topo.stars.iter().zip(conical_residuals(mesh, topo)) {
+        let deg = c.to_degrees();
+        if deg > r.conical_max_deg {
+            r.conical_max_deg = deg;
+            r.conical_worst_vertex = s.vertex;
+        }
+    }
+    for (v, p) in mesh.vertices.iter().enumerate() {
+        let d = (index.closest(p).point - p).norm() / mean;
+        if d > r.closeness_max {
+            r.closeness_max = d;
+            r.closeness_worst_vertex = v;
+        }
+        if topo.boundary[v] {
+            let b = (index.closest_on_boundary(p).point - p).norm() / mean;
+            if b > r.boundary_max {
+                r.boundary_max = b;
+                r.boundary_worst_vertex = v;
+            }
+        }
+    }
+    r.coverage = coverage(mesh, index.mesh, mean);
+    let g = goals;
+    if r.planarity_max > g.planarity {
+        r.unmet.push(format!(
+            "planarity {:.5} > {} at face {}",
+            r.planarity_max, g.planarity, r.planarity_worst_face
+        ));
+    }
+    if r.conical_max_deg > g.conical_deg {
+        r.unmet.push(format!(
+            "conical residual {:.3} deg > {} deg at vertex {}",
+            r.conical_max_deg, g.conical_deg, r.conical_worst_vertex
+        ));
+    }
+    if r.closeness_max > g.closeness {
+        r.unmet.push(format!(
+            "distance to target {:.4} of the unit side > {} at vertex {}",
+            r.closeness_max, g.closeness, r.closeness_worst_vertex
+        ));
+    }
+    if r.boundary_max > g.boundary {
+        r.unmet.push(format!(
+            "distance to boundary {:.4} of the unit side > {} at vertex {}",
+            r.boundary_max, g.boundary, r.boundary_worst_vertex
+        ));
+    }
+    if r.coverage < g.coverage {
+        r.unmet
+            .push(format!("coverage {:.3} < {}", r.coverage, g.coverage));
+    }
+    if r.edge_ratio_fraction < g.edge_ratio_fraction {
+        r.unmet.push(format!(
+            "faces with edge ratio <= {EDGE_RATIO_LIMIT}: {:.3} < {} (max ratio {:.2})",
+            r.edge_ratio_fraction, g.edge_ratio_fraction, r.edge_ratio_max
+        ));
+    }
+    if let Some(&f) = r.non_convex_faces.first() {
+        r.unmet.push(format!(
+            "{} non-convex face(s), first face {f}",
+            r.non_convex_faces.len()
+        ));
+    }
+    r
+}
+
+/// Area fraction of the target within `0.1 * mean` of the hub mesh (triangulated).
+fn coverage(mesh: &QuadMesh, target: &TargetMesh, mean: Real) -> Real {
+    let mut tri = TargetMesh {
+        vertices: mesh.vertices.clone(),
+        triangles: Vec::with_capacity(mesh.faces.len() * 4),
+    };
+    // split each quad into 4 triangles around its centroid (symmetric, no diagonal bias)
+    for f in &mesh.faces {
+        let c = tri.vertices.len();
+        let centre = Point3::from(
+            f.iter()
+                .map(|&i| mesh.vertices[i].coords)
+                .sum::<sv_geom::Vector3>()
+                / 4.0,
+        );
+        tri.vertices.push(centre);
+        for k in 0..4 {
+            tri.triangles.push([f[k], f[(k + 1) % 4], c]);
+        }
+    }
+    let Ok(index) = TargetIndex::new(&tri) else {
+        return 0.0;
+    };
+    let v = &target.vertices;
+    let mut covered = 0.0;
+    let mut total = 0.0;
+    for t in &target.triangles {
+        let a = crate::target::triangle_area(v, t);
+        let c = Point3::from((v[t[0]].coords + v[t[1]].coords + v[t[2]].coords) / 3.0);
+        total += a;
+        if (index.closest(&c).point - c).norm() <= 0.1 * mean {
+            covered += a;
+        }
+    }
+    if total > 0.0 {
+        covered / total
+    } else {
+        0.0
+    }
+}

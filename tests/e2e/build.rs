@@ -1,0 +1,193 @@
+//! `spinvalence build`: target surface to deployed frame, its config file and bad input.
+
+use crate::util::{num, read_json, Dir};
+
+const FILES: [&str; 5] = [
+    "frame.json",
+    "frame.obj",
+    "mesh.obj",
+    "report.json",
+    "timings.json",
+];
+
+#[test]
+fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
+    let dir = Dir::new();
+    let out = dir.run(&["build"]);
+    out.expect_code(0);
+    assert_eq!(dir.entries("out"), FILES.to_vec(), "{out:?}");
+    for row in [
+        "units",
+        "planarity max",
+        "conical residual max",
+        "distance to target max",
+        "gap max",
+        "gap sum",
+        "hub overlap",
+        "time secondary / primary",
+    ] {
+        assert!(out.stdout.contains(row), "summary lacks {row}:{out:?}");
+    }
+    let timings = read_json(&dir.join("out/timings.json"));
+    for stage in ["secondary", "primary", "total"] {
+        let t = num(&timings[stage], stage);
+        assert!(t > 0.0 && t.is_finite(), "{stage}: {t}");
+    }
+    assert!(
+        num(&timings["total"], "total")
+            >= num(&timings["secondary"], "s") + num(&timings["primary"], "p")
+    );
+    let frame = read_json(&dir.join("out/frame.json"));
+    let units = frame["units"].as_array().unwrap().len();
+    assert!(units > 50, "{units} units");
+    assert!(out.stdout.contains(&units.to_string()), "{out:?}");
+    let report = read_json(&dir.join("out/report.json"));
+    assert_eq!(report["faces"].as_u64(), Some(units as u64));
+    // the hub mesh on its own is a valid input of `solve`
+    dir.run(&[
+        "solve",
+        "--mesh",
+        "out/mesh.obj",
+        "--out",
+        "again",
+        "--quiet",
+    ])
+    .expect_code(0);
+    dir.run(&["check", "out/frame.json"]).expect_code(0);
+}
+
+#[test]
+fn config_file_sets_parameters_and_flags_override_it() {
+    let dir = Dir::new();
+    dir.write(
+        "build.toml",
+        "target = \"builtin:dome\"\nout = \"from-config\"\n[secondary]\nunit_size = 400.0\n[primary]\nspin_angle_deg = 40.0\n",
+    );
+    dir.run(&["build", "--config", "build.toml", "--quiet"])
+        .expect_code(0);
+    let frame = read_json(&dir.join("from-config/frame.json"));
+    let spin = num(&frame["params"]["spin_angle"], "spin_angle");
+    assert!((spin - 40f64.to_radians()).abs() < 1e-12);
+    let coarse = frame["units"].as_array().unwrap().len();
+    // a smaller unit on the command line wins over the file: more units
+    dir.run(&[
+        "build",
+        "--config",
+        "build.toml",
+        "--unit-size",
+        "300",
+        "--out",
+        "fine",
+        "--quiet",
+    ])
+    .expect_code(0);
+    let fine = read_json(&dir.join("fine/frame.json"))["units"]
+        .as_array()
+        .unwrap()
+        .len();
+    assert!(fine > coarse, "{fine} vs {coarse}");
+    assert!(dir.entries("").contains(&"from-config".to_string()));
+}
+
+#[test]
+fn print_config_round_trips_through_build() {
+    let dir = Dir::new();
+    let out = dir.run(&["build", "--print-config"]);
+    out.expect_code(0);
+    assert!(
+        out.stdout.contains("[secondary]") && out.stdout.contains("unit_size"),
+        "{out:?}"
+    );
+    let config = out.stdout.replace("unit_size = 300.0", "unit_size = 500.0");
+    dir.write("c.toml", config);
+    dir.run(&[
+        "build",
+        "--config",
+        "c.toml",
+        "--target",
+        "builtin:vault",
+        "--out",
+        "v",
+        "--quiet",
+    ])
+    .expect_code(0);
+    dir.run(&["check", "v/frame.json"]).expect_code(0);
+}
+
+#[test]
+fn obj_target_file_builds() {
+    let dir = Dir::new();
+    // a gently curved 2.4 x 1.8 m patch, triangulated
+    let (nx, ny) = (24, 18);
+    let mut text = String::new();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let (x, y) = (i as f64 * 100.0, j as f64 * 100.0);
+            let z = 0.00005 * ((x - 1200.0).powi(2) + (y - 900.0).powi(2));
+            text += &format!("v {x} {y} {z}\n");
+        }
+    }
+    let id = |i: usize, j: usize| j * (nx + 1) + i + 1;
+    for j in 0..ny {
+        for i in 0..nx {
+            text += &format!("f {} {} {}\n", id(i, j), id(i + 1, j), id(i + 1, j + 1));
+            text += &format!("f {} {} {}\n", id(i, j), id(i + 1, j + 1), id(i, j + 1));
+        }
+    }
+    dir.write("bowl.obj", text);
+    dir.run(&[
+        "build",
+        "--target",
+        "bowl.obj",
+        "--unit-size",
+        "300",
+        "--out",
+        "b",
+        "--quiet",
+    ])
+    .expect_code(0);
+    dir.run(&["check", "b/frame.json"]).expect_code(0);
+}
+
+#[test]
+fn bad_build_input_is_one_line_and_writes_nothing() {
+    let dir = Dir::new();
+    dir.write("empty.obj", "");
+    dir.write("garbage.stl", [0u8, 159, 146, 150, 7, 7, 7]);
+    dir.write("typo.toml", "[secondary]\nunit_sise = 250.0\n");
+    dir.write("nan.obj", "v 0 0 0\nv 1000 0 nan\nv 0 1000 0\nf 1 2 3\n");
+    // a closed tetrahedron: no boundary
+    dir.write(
+        "closed.obj",
+        "v 0 0 0\nv 1000 0 0\nv 0 1000 0\nv 0 0 1000\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n",
+    );
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--target", "empty.obj"], "empty.obj"),
+        (vec!["--target", "garbage.stl"], "garbage.stl"),
+        (vec!["--target", "missing.stl"], "missing.stl"),
+        (vec!["--target", "nan.obj"], "nan.obj"),
+        (vec!["--target", "closed.obj"], "closed.obj"),
+        (vec!["--target", "builtin:nope"], "nope"),
+        (vec!["--config", "typo.toml"], "typo.toml:2"),
+        (vec!["--unit-size", "0"], "unit size"),
+        (vec!["--unit-size", "-300"], "unit size"),
+        (vec!["--unit-size", "nan"], "unit size"),
+        (vec!["--spin-angle", "90"], "spin angle"),
+        (vec!["--spin-angle", "0"], "spin angle"),
+        (vec!["--expansion", "0.5"], "expansion"),
+        // a target smaller than one unit
+        (
+            vec!["--target", "builtin:flat", "--unit-size", "100000"],
+            "",
+        ),
+    ];
+    for (args, needle) in cases {
+        let mut argv = vec!["build", "--out", "o"];
+        argv.extend(args.iter());
+        let out = dir.run(&argv);
+        out.expect_code(2);
+        let line = out.one_error_line();
+        assert!(line.contains(needle), "{needle}: {out:?}");
+        assert!(dir.entries("o").is_empty(), "partial output for {args:?}");
+    }
+}
