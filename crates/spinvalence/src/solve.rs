@@ -92,7 +92,10 @@ pub fn run(args: &SolveArgs) -> Result<()> {
                 "hub overlap",
                 &format!("{} mm .. {} mm", number(min), number(max)),
             ],
-            ["iterations", &report.iterations.to_string()],
+            [
+                "iterations",
+                &format!("{} ({} factorisations)", report.iterations, report.factorizations),
+            ],
             ["wall time", &seconds(started.elapsed())],
             ["wrote", &written.join(", ")],
         ];

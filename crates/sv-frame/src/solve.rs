@@ -100,6 +100,8 @@ pub struct SolveReport {
     pub gap_max: Real,
     /// Iterations used.
     pub iterations: usize,
+    /// Sparse Cholesky factorisations (one per iteration plus one per rejected step).
+    pub factorizations: usize,
 }
 
 /// Gaps and overlaps of a set of deployments.
@@ -205,6 +207,7 @@ pub fn solve(
         gap_sum: evaluation.gaps.iter().sum(),
         gap_max: evaluation.gaps.iter().copied().fold(0.0, Real::max),
         iterations,
+        factorizations: lm.factorizations,
     };
     progress(Progress {
         iteration: total,
@@ -565,6 +568,7 @@ struct Lm<'a> {
     symbolic: SymbolicSparseColMat<usize>,
     argsort: faer::sparse::Argsort<usize>,
     llt_symbolic: SymbolicLlt<usize>,
+    factorizations: usize,
 }
 
 impl<'a> Lm<'a> {
@@ -592,6 +596,7 @@ impl<'a> Lm<'a> {
             symbolic,
             argsort,
             llt_symbolic,
+            factorizations: 0,
         })
     }
 
@@ -672,6 +677,7 @@ impl<'a> Lm<'a> {
                 let mat =
                     SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &vals)
                         .map_err(|e| FrameError::Linear(format!("{e:?}")))?;
+                self.factorizations += 1;
                 let Ok(llt) = Llt::try_new_with_symbolic(
                     self.llt_symbolic.clone(),
                     mat.as_ref(),
@@ -682,33 +688,45 @@ impl<'a> Lm<'a> {
                 };
                 let mut rhs = faer::Mat::<Real>::from_fn(2 * n, 1, |i, _| -grad[i]);
                 llt.solve_in_place(rhs.as_mut());
-                let trial: Vec<Deployment> = deps
-                    .iter()
-                    .enumerate()
-                    .map(|(u, d)| Deployment {
-                        theta: (d.theta + rhs[(2 * u, 0)]).clamp(THETA_BOUNDS.0, THETA_BOUNDS.1),
-                        phi: (d.phi + rhs[(2 * u + 1, 0)]).clamp(PHI_BOUNDS.0, PHI_BOUNDS.1),
-                        ..*d
-                    })
-                    .collect();
-                let step_ok = trial
-                    .iter()
-                    .all(|d| d.theta.is_finite() && d.phi.is_finite());
-                let new = if step_ok {
-                    self.cost(&trial, &weights).ok()
-                } else {
-                    None
-                };
-                match new {
-                    Some((g, c)) if c < cost => {
+                // Backtrack along this step before damping more: a rejected full step is
+                // usually a closest point jumping to another end of a side, and a shorter
+                // step along the same direction costs no new factorisation.
+                for fraction in [1.0, 0.5, 0.25] {
+                    let trial: Vec<Deployment> = deps
+                        .iter()
+                        .enumerate()
+                        .map(|(u, d)| Deployment {
+                            theta: (d.theta + fraction * rhs[(2 * u, 0)])
+                                .clamp(THETA_BOUNDS.0, THETA_BOUNDS.1),
+                            phi: (d.phi + fraction * rhs[(2 * u + 1, 0)])
+                                .clamp(PHI_BOUNDS.0, PHI_BOUNDS.1),
+                            ..*d
+                        })
+                        .collect();
+                    let step_ok = trial
+                        .iter()
+                        .all(|d| d.theta.is_finite() && d.phi.is_finite());
+                    let new = if step_ok {
+                        self.cost(&trial, &weights).ok()
+                    } else {
+                        None
+                    };
+                    if let Some((g, _)) = new.filter(|(_, c)| *c < cost) {
                         deps.copy_from_slice(&trial);
                         gaps = g;
-                        lambda = (lambda / 3.0).max(1e-12);
+                        lambda = if fraction == 1.0 {
+                            (lambda / 3.0).max(1e-12)
+                        } else {
+                            lambda * 2.0
+                        };
                         accepted = true;
                         break;
                     }
-                    _ => lambda *= 4.0,
                 }
+                if accepted {
+                    break;
+                }
+                lambda *= 4.0;
             }
             if !accepted {
                 return Ok(it + 1);
