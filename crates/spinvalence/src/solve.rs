@@ -94,7 +94,10 @@ pub fn run(args: &SolveArgs) -> Result<()> {
             ],
             [
                 "iterations",
-                &format!("{} ({} factorisations)", report.iterations, report.factorizations),
+                &format!(
+                    "{} ({} factorisations)",
+                    report.iterations, report.factorizations
+                ),
             ],
             ["wall time", &seconds(started.elapsed())],
             ["wrote", &written.join(", ")],
