@@ -18,10 +18,52 @@ pub const FRAME_LENGTH_UNIT: &str = "mm";
 /// Non-finite numbers are written as `null`, which [`frame_from_json`] rejects.
 pub fn frame_to_json(file: &FrameFile) -> String {
     // FrameFile is plain data with string keys: serialising it cannot fail
-    let mut text = serde_json::to_string_pretty(file)
+    let text = serde_json::to_string_pretty(file)
         .expect("internal: a FrameFile always serialises to JSON");
+    let mut text = inline_number_arrays(&text);
     text.push('\n');
     text
+}
+
+/// Put every array of plain numbers on one line (`[x, y, z]`) in pretty-printed JSON:
+/// a 10,000-unit frame shrinks to about a third and reads point by point.
+pub fn inline_number_arrays(pretty: &str) -> String {
+    let lines: Vec<&str> = pretty.lines().collect();
+    let mut out = String::with_capacity(pretty.len() / 2);
+    let mut i = 0;
+    while i < lines.len() {
+        let line = lines[i];
+        if line.ends_with('[') {
+            // the elements up to the closing bracket, if every one is a number
+            let mut j = i + 1;
+            let mut items = Vec::new();
+            while j < lines.len() {
+                let item = lines[j].trim();
+                if item.starts_with(']') {
+                    break;
+                }
+                let bare = item.strip_suffix(',').unwrap_or(item);
+                if bare.parse::<f64>().is_err() {
+                    break;
+                }
+                items.push(bare);
+                j += 1;
+            }
+            if j < lines.len() && lines[j].trim().starts_with(']') && !items.is_empty() {
+                out.push_str(line);
+                out.push_str(&items.join(", "));
+                out.push_str(lines[j].trim());
+                out.push('\n');
+                i = j + 1;
+                continue;
+            }
+        }
+        out.push_str(line);
+        out.push('\n');
+        i += 1;
+    }
+    out.pop();
+    out
 }
 
 /// Read and check a frame file. `name` is the file name used in messages.
@@ -377,6 +419,22 @@ fn check_indices(file: &FrameFile, name: &str) -> Result<(), IoError> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    #[test]
+    fn number_arrays_go_on_one_line_and_parse_the_same() {
+        let v = serde_json::json!({"a": [[1.5, -2.0e-7, 3], [4, 5, 6]], "b": ["x", "y"], "c": [], "d": {"e": [7]}});
+        let pretty = serde_json::to_string_pretty(&v).unwrap();
+        let inline = inline_number_arrays(&pretty);
+        assert!(
+            inline.contains("[\n    [1.5, -2e-7, 3],\n    [4, 5, 6]\n  ]"),
+            "{inline}"
+        );
+        assert!(inline.contains("\"e\": [7]"), "{inline}");
+        // strings stay one per line
+        assert!(inline.contains("\"x\",\n"), "{inline}");
+        let back: serde_json::Value = serde_json::from_str(&inline).unwrap();
+        assert_eq!(back, v);
+    }
 
     /// A small, hand-made frame: two flat units side by side, primary tiles 50 mm below.
     pub(crate) fn two_units() -> FrameFile {
