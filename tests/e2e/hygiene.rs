@@ -33,3 +33,24 @@ fn fixtures_readme_mentions_every_fixture() {
         );
     }
 }
+
+/// docs/config.md shows exactly what `build --print-config` prints.
+#[test]
+fn config_doc_matches_print_config() {
+    let out = crate::util::Dir::new().run(&["build", "--print-config"]);
+    out.expect_code(0);
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/config.md"))
+        .unwrap();
+    let start = doc
+        .find("<!-- defaults:begin -->\n```toml\n")
+        .expect("defaults block")
+        + "<!-- defaults:begin -->\n```toml\n".len();
+    let end = doc
+        .find("```\n<!-- defaults:end -->")
+        .expect("end of defaults block");
+    assert_eq!(
+        doc[start..end].trim_end(),
+        out.stdout.trim_end(),
+        "docs/config.md is stale: paste `spinvalence build --print-config` into it"
+    );
+}
