@@ -4,7 +4,7 @@ CARGO ?= cargo
 
 export PROPTEST_RNG_SEED ?= 20261122
 
-.PHONY: test toolchain fmt-check clippy unit-tests bench fixtures
+.PHONY: test toolchain fmt-check clippy unit-tests bench bench-primary fixtures
 
 ## Everything CI checks: formatting, lints (warnings denied), unit, integration, e2e and doc tests.
 test: toolchain fmt-check clippy unit-tests
@@ -24,8 +24,13 @@ unit-tests:
 	$(CARGO) test --workspace
 
 ## Criterion benchmarks of every crate that has them (figures go to docs/).
-bench:
+bench: bench-primary
 	$(CARGO) bench --workspace
+
+## The primary solve against the paper's SciPy SLSQP baseline, whole process against whole
+## process (needs python3; makes a venv with numpy and scipy in target/). UNITS=n sets the cap.
+bench-primary:
+	bash bench/primary_vs_slsqp.sh
 
 ## Regenerate the OBJ fixtures in fixtures/ (a test fails when they are stale).
 fixtures:

@@ -71,7 +71,7 @@ impl Default for SolveOptions {
             expansion: 1.0,
             side: SidePolicy::Auto,
             axis_case: Some(AxisCase::OrthogonalToR1),
-            max_iterations: 50,
+            max_iterations: 40,
             tolerance: 1e-3,
             planarity_tolerance: crate::MeshChecks::DEFAULT_PLANARITY_TOLERANCE,
         }
