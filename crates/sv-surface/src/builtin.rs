@@ -15,6 +15,13 @@ use crate::{SurfaceError, TargetMesh};
 /// Names accepted by [`builtin_target`].
 pub const BUILTIN_NAMES: [&str; 5] = ["flat", "vault", "dome", "saddle", "pavilion"];
 
+/// Superellipse exponent of the built-in footprints: 40 gives a rectangle whose corners
+/// are rounded over about 2 % of the half-width (40 mm on a 2 m half-width), so the
+/// boundary turns by nearly 90 degrees within one unit at every unit size down to
+/// 100 mm and the hub grid's four corners sit there (a grid corner on a smooth arc
+/// has a face angle near 180 degrees, which no rhombic hub fits).
+const FOOTPRINT_EXPONENT: Real = 40.0;
+
 /// Default built-in target (the embedded default of `spinvalence build`).
 pub const DEFAULT_BUILTIN: &str = "pavilion";
 
@@ -24,12 +31,12 @@ pub fn builtin_target(name: &str) -> Result<TargetMesh, SurfaceError> {
     let key = name.strip_prefix("builtin:").unwrap_or(name);
     let n = 96;
     let mesh = match key {
-        "flat" => footprint_mesh(n, 2200.0, 1600.0, 8.0, |_| 1.0, |_, _| 0.0),
+        "flat" => footprint_mesh(n, 2200.0, 1600.0, FOOTPRINT_EXPONENT, |_| 1.0, |_, _| 0.0),
         "vault" => footprint_mesh(
             n,
             2500.0,
             1800.0,
-            8.0,
+            FOOTPRINT_EXPONENT,
             |_| 1.0,
             |_, y| {
                 let r: Real = 2500.0;
@@ -40,7 +47,7 @@ pub fn builtin_target(name: &str) -> Result<TargetMesh, SurfaceError> {
             n,
             2000.0,
             2000.0,
-            8.0,
+            FOOTPRINT_EXPONENT,
             |_| 1.0,
             |x, y| {
                 let r: Real = 4000.0;
@@ -51,7 +58,7 @@ pub fn builtin_target(name: &str) -> Result<TargetMesh, SurfaceError> {
             n,
             2000.0,
             2000.0,
-            8.0,
+            FOOTPRINT_EXPONENT,
             |_| 1.0,
             |x, y| (x * x - y * y) / 7000.0,
         ),
@@ -59,7 +66,7 @@ pub fn builtin_target(name: &str) -> Result<TargetMesh, SurfaceError> {
             n,
             3000.0,
             2000.0,
-            8.0,
+            FOOTPRINT_EXPONENT,
             |phi| 1.0 + 0.04 * (2.0 * phi).cos(),
             |x, y| {
                 // arched along X, waved across Y (curvature sign changes at |y| = 1100)

@@ -240,14 +240,18 @@ pub(crate) fn optimise_indexed(
                     .try_normalize(1e-12)
                     .unwrap_or_else(|| b.tangent.cross(&Vector3::z()).normalize());
                 let u2 = b.tangent.cross(&u1);
-                // corner vertices (one face) keep their place along the boundary
-                let corner = topo.corner[v].then(|| (p - initial_vertices[v]) / scale);
-                let tangential = corner.map(|d| (b.tangent, d));
-                for (u, d) in [(u1, d), (u2, d)].into_iter().chain(tangential) {
+                for u in [u1, u2] {
                     cols.clear();
                     vals.clear();
                     push3(&mut cols, &mut vals, 3 * v, &u);
                     system.row(&cols, &vals, u.dot(&d), opts.boundary_weight);
+                }
+                // grid corners (one face) stay where the boundary turns most: pinned
+                if topo.corner[v] {
+                    let d = (p - initial_vertices[v]) / scale;
+                    for k in 0..3 {
+                        system.row(&[3 * v + k], &[1.0], d[k], 5.0 * opts.boundary_weight);
+                    }
                 }
             }
         }

@@ -114,11 +114,30 @@ pub(crate) fn initial_grid_indexed(
         .collect();
     let wx = xy.iter().map(|p| p.0.abs()).fold(0.0, Real::max).max(1e-9);
     let wy = xy.iter().map(|p| p.1.abs()).fold(0.0, Real::max).max(1e-9);
+    // turning of the boundary (angle between the chords to the points half a unit
+    // before and after) at every boundary vertex: grid corners go where it turns most
+    let turning: Vec<Real> = (0..m)
+        .map(|k| {
+            let s = index.boundary_arc[k];
+            let p = v[lp[k]];
+            let a = p - index.boundary_at(s - 0.75 * h);
+            let b = index.boundary_at(s + 0.75 * h) - p;
+            if a.norm() > 0.0 && b.norm() > 0.0 {
+                a.angle(&b)
+            } else {
+                0.0
+            }
+        })
+        .collect();
     let pick = |sx: Real, sy: Real| {
+        let score = |a: usize| sx * xy[a].0 / wx + sy * xy[a].1 / wy;
+        let best = (0..m).map(score).fold(Real::NEG_INFINITY, Real::max);
+        // among the points nearly extreme along the diagonal, the sharpest turn
         (0..m)
+            .filter(|&a| score(a) >= best - 0.3)
             .max_by(|&a, &b| {
-                let fa = sx * xy[a].0 / wx + sy * xy[a].1 / wy;
-                let fb = sx * xy[b].0 / wx + sy * xy[b].1 / wy;
+                let fa = turning[a] + 0.5 * score(a);
+                let fb = turning[b] + 0.5 * score(b);
                 fa.total_cmp(&fb)
             })
             .unwrap_or(0)

@@ -25,8 +25,9 @@ pub struct SecondaryReport {
     pub planarity_max: Real,
     /// Face with the largest planarity residual.
     pub planarity_worst_face: usize,
-    /// Largest angle-balance residual `|w1 - w2 + w3 - w4| / 2` (degrees) over interior
-    /// valence-4 vertices, `w_k` the face angles in cyclic order.
+    /// Largest angle-balance residual `|w1 - w2 + w3 - w4|` (degrees) over interior
+    /// valence-4 vertices, `w_k` the face angles in cyclic order (the same figure as
+    /// `sv_frame::QuadMesh::conical_residuals`, which is in radians).
     pub conical_max_deg: Real,
     /// Vertex with the largest conical residual.
     pub conical_worst_vertex: usize,
@@ -45,6 +46,12 @@ pub struct SecondaryReport {
     pub edge_ratio_fraction: Real,
     /// Largest edge ratio of any face.
     pub edge_ratio_max: Real,
+    /// Largest rhombus-fit residual: max distance between a face's corners and the
+    /// corners of its best-fit rhombus (`sv_frame::Hub::fit`, the hub the primary tile is
+    /// congruent to) / the face's mean edge.
+    pub rhombus_fit_max: Real,
+    /// Face with the largest rhombus-fit residual.
+    pub rhombus_fit_worst_face: usize,
     /// Faces that are not strictly convex (an angle at or above 180 degrees).
     pub non_convex_faces: Vec<usize>,
     /// Gauss-Newton iterations run.
@@ -96,7 +103,7 @@ pub(crate) fn conical_residuals(mesh: &QuadMesh, topo: &Topology) -> Vec<Real> {
                 let b = mesh.vertices[face[(k + 3) % 4]] - v;
                 a.angle(&b)
             });
-            (w[0] - w[1] + w[2] - w[3]).abs() / 2.0
+            (w[0] - w[1] + w[2] - w[3]).abs()
         })
         .collect()
 }
@@ -124,6 +131,8 @@ pub(crate) fn measure(
         coverage: 0.0,
         edge_ratio_fraction: 0.0,
         edge_ratio_max: 0.0,
+        rhombus_fit_max: 0.0,
+        rhombus_fit_worst_face: 0,
         non_convex_faces: Vec::new(),
         iterations,
         unmet: Vec::new(),
@@ -156,6 +165,11 @@ pub(crate) fn measure(
         });
         if !convex {
             r.non_convex_faces.push(f);
+        }
+        let fit = rhombus_fit(&p) / fm.max(1e-300);
+        if fit > r.rhombus_fit_max {
+            r.rhombus_fit_max = fit;
+            r.rhombus_fit_worst_face = f;
         }
         let _ = face;
     }
@@ -224,6 +238,17 @@ pub(crate) fn measure(
         ));
     }
     r
+}
+
+/// Max distance between the corners of `quad` and those of its best-fit rhombus (mm);
+/// infinite when no rhombus fits (degenerate face).
+pub(crate) fn rhombus_fit(quad: &[Point3; 4]) -> Real {
+    match sv_frame::Hub::fit(quad, 0.0) {
+        Some(h) => (0..4)
+            .map(|k| (h.corner(k) - quad[k]).norm())
+            .fold(0.0, Real::max),
+        None => Real::INFINITY,
+    }
 }
 
 /// Area fraction of the target within `0.1 * mean` of the hub mesh (triangulated).
