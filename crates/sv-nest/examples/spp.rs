@@ -1,0 +1,56 @@
+//! Strip-packing benchmark runner:
+//! `cargo run --release -p sv-nest --example spp -- FILE --seconds 60 --seed 0 [--svg OUT]`.
+#![allow(clippy::print_stdout)]
+
+use std::time::Duration;
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut file = None;
+    let mut secs = 10.0;
+    let mut seed = 0;
+    let mut i = 0;
+    while i < args.len() {
+        match args[i].as_str() {
+            "--seconds" => {
+                secs = args[i + 1].parse().expect("seconds");
+                i += 1;
+            }
+            "--seed" => {
+                seed = args[i + 1].parse().expect("seed");
+                i += 1;
+            }
+            f => file = Some(f.to_string()),
+        }
+        i += 1;
+    }
+    let file = file.expect("usage: spp FILE [--seconds S] [--seed N]");
+    let inst = sv_nest::StripInstance::read(std::path::Path::new(&file)).expect("instance");
+    let opts = sv_nest::StripOptions {
+        seed,
+        time_limit: Duration::from_secs_f64(secs),
+        ..Default::default()
+    };
+    let mut first = None;
+    let res = sv_nest::nest_strip(&inst, &opts, &mut |p| {
+        if first.is_none() {
+            first = Some(p.density);
+        }
+        eprintln!(
+            "{:8.2}s evals {:10} length {:.3} density {:.2}%",
+            p.elapsed_s,
+            p.evaluations,
+            p.best,
+            100.0 * p.density
+        );
+    });
+    println!(
+        "{} length {:.3} density {:.2} construct {:.2} evals {} time {:.1}",
+        res.name,
+        res.length,
+        100.0 * res.density,
+        100.0 * first.unwrap_or(0.0),
+        res.evaluations,
+        res.elapsed_s
+    );
+}

@@ -1,0 +1,338 @@
+//! Minimal ASCII DXF reader for closed-contour parts.
+//!
+//! Reads `LWPOLYLINE` (with bulges), `POLYLINE`/`VERTEX`, `CIRCLE`, and chains of `LINE` and
+//! `ARC` from the ENTITIES section (any layer). Contours are nested by containment: even depth
+//! = outer contour of a part, odd depth = hole of its parent.
+
+use std::path::Path;
+
+use crate::part::{polygon_area, Contour, Part, Vertex};
+use crate::NestError;
+
+/// Endpoint matching tolerance (drawing units) when chaining LINE/ARC entities.
+pub const DEFAULT_CHAIN_TOLERANCE: f64 = 1e-3;
+
+/// Parts read from a DXF plus per-contour problems (open chains, ...).
+#[derive(Clone, Debug, Default)]
+pub struct DxfParts {
+    /// parts built from closed contours
+    pub parts: Vec<Part>,
+    /// contours that were rejected, each naming its part/contour
+    pub rejected: Vec<NestError>,
+}
+
+/// Reads a DXF file; part ids are the file stem (with `#k` when the file holds several parts).
+pub fn read_parts(path: &Path) -> Result<DxfParts, NestError> {
+    let text = std::fs::read(path).map_err(|e| NestError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    let text = String::from_utf8_lossy(&text);
+    let stem = path
+        .file_stem()
+        .map_or_else(|| "part".to_string(), |s| s.to_string_lossy().into_owned());
+    parse_parts(&text, &stem)
+}
+
+#[derive(Clone, Copy)]
+struct Seg {
+    a: [f64; 2],
+    b: [f64; 2],
+    bulge: f64,
+}
+
+/// Parses DXF text; `name` prefixes part ids.
+pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
+    let err = |line: usize, m: &str| NestError::Dxf {
+        file: name.to_string(),
+        message: format!("line {line}: {m}"),
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    if lines.len() < 2 {
+        return Err(err(0, "empty or not an ASCII DXF"));
+    }
+    let mut pairs = Vec::with_capacity(lines.len() / 2);
+    let mut i = 0;
+    while i + 1 < lines.len() {
+        let code: i32 = lines[i]
+            .trim()
+            .parse()
+            .map_err(|_| err(i + 1, &format!("bad group code {:?}", lines[i].trim())))?;
+        pairs.push((code, lines[i + 1].trim(), i + 1));
+        i += 2;
+    }
+    // locate ENTITIES
+    let start = pairs
+        .windows(2)
+        .position(|w| w[0].0 == 0 && w[0].1 == "SECTION" && w[1].0 == 2 && w[1].1 == "ENTITIES")
+        .ok_or_else(|| err(0, "no ENTITIES section"))?
+        + 2;
+    // split entities
+    let mut ents: Vec<&[(i32, &str, usize)]> = Vec::new();
+    let mut k = start;
+    while k < pairs.len() {
+        if pairs[k].0 == 0 {
+            if pairs[k].1 == "ENDSEC" {
+                break;
+            }
+            let mut e = k + 1;
+            while e < pairs.len() && pairs[e].0 != 0 {
+                e += 1;
+            }
+            ents.push(&pairs[k..e]);
+            k = e;
+        } else {
+            k += 1;
+        }
+    }
+    let num = |v: &str, line: usize| -> Result<f64, NestError> {
+        v.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| err(line, &format!("bad number {v:?}")))
+    };
+    let mut contours: Vec<Contour> = Vec::new();
+    let mut segs: Vec<Seg> = Vec::new();
+    let mut rejected = Vec::new();
+    let mut e = 0;
+    while e < ents.len() {
+        let ent = ents[e];
+        let kind = ent[0].1;
+        let get = |c: i32| ent.iter().find(|p| p.0 == c);
+        let getf =
+            |c: i32, d: f64| -> Result<f64, NestError> { get(c).map_or(Ok(d), |p| num(p.1, p.2)) };
+        match kind {
+            "LWPOLYLINE" => {
+                let flags = getf(70, 0.0)? as i64;
+                let mut vs: Vec<Vertex> = Vec::new();
+                for p in &ent[1..] {
+                    match p.0 {
+                        10 => vs.push(Vertex::line(num(p.1, p.2)?, 0.0)),
+                        20 => {
+                            if let Some(v) = vs.last_mut() {
+                                v.y = num(p.1, p.2)?;
+                            }
+                        }
+                        42 => {
+                            if let Some(v) = vs.last_mut() {
+                                v.bulge = num(p.1, p.2)?;
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                push_polyline(
+                    vs,
+                    flags & 1 == 1,
+                    ent[0].2,
+                    name,
+                    &mut contours,
+                    &mut rejected,
+                );
+            }
+            "POLYLINE" => {
+                let flags = getf(70, 0.0)? as i64;
+                let mut vs = Vec::new();
+                e += 1;
+                while e < ents.len() && ents[e][0].1 == "VERTEX" {
+                    let v = ents[e];
+                    let f = |c: i32| -> Result<f64, NestError> {
+                        v.iter()
+                            .find(|p| p.0 == c)
+                            .map_or(Ok(0.0), |p| num(p.1, p.2))
+                    };
+                    vs.push(Vertex {
+                        x: f(10)?,
+                        y: f(20)?,
+                        bulge: f(42)?,
+                    });
+                    e += 1;
+                }
+                // e now at SEQEND (or next entity)
+                if !(e < ents.len() && ents[e][0].1 == "SEQEND") {
+                    e -= 1;
+                }
+                push_polyline(
+                    vs,
+                    flags & 1 == 1,
+                    ent[0].2,
+                    name,
+                    &mut contours,
+                    &mut rejected,
+                );
+            }
+            "CIRCLE" => {
+                let r = getf(40, 0.0)?;
+                if r > 0.0 {
+                    contours.push(Contour::circle(getf(10, 0.0)?, getf(20, 0.0)?, r));
+                } else {
+                    rejected.push(NestError::BadPart {
+                        part: format!("{name} (circle at line {})", ent[0].2),
+                        reason: "zero radius".into(),
+                    });
+                }
+            }
+            "LINE" => segs.push(Seg {
+                a: [getf(10, 0.0)?, getf(20, 0.0)?],
+                b: [getf(11, 0.0)?, getf(21, 0.0)?],
+                bulge: 0.0,
+            }),
+            "ARC" => {
+                let (cx, cy, r) = (getf(10, 0.0)?, getf(20, 0.0)?, getf(40, 0.0)?);
+                let (a0, mut a1) = (getf(50, 0.0)?, getf(51, 0.0)?);
+                if a1 <= a0 {
+                    a1 += 360.0;
+                }
+                let sweep = (a1 - a0).to_radians();
+                let p = |a: f64| [cx + r * a.to_radians().cos(), cy + r * a.to_radians().sin()];
+                segs.push(Seg {
+                    a: p(a0),
+                    b: p(a1),
+                    bulge: (sweep / 4.0).tan(),
+                });
+            }
+            _ => {}
+        }
+        e += 1;
+    }
+    chain(segs, name, &mut contours, &mut rejected);
+    let parts = group(contours, name);
+    Ok(DxfParts { parts, rejected })
+}
+
+fn push_polyline(
+    mut vs: Vec<Vertex>,
+    closed_flag: bool,
+    line: usize,
+    name: &str,
+    out: &mut Vec<Contour>,
+    rejected: &mut Vec<NestError>,
+) {
+    let same = |a: &Vertex, b: &Vertex| (a.x - b.x).abs() < 1e-9 && (a.y - b.y).abs() < 1e-9;
+    let closed = closed_flag || (vs.len() > 2 && same(&vs[0], &vs[vs.len() - 1]));
+    if vs.len() > 1 && same(&vs[0], &vs[vs.len() - 1]) {
+        vs.pop();
+    }
+    if !closed {
+        rejected.push(NestError::BadPart {
+            part: format!("{name} (polyline at line {line})"),
+            reason: "open contour".into(),
+        });
+    } else if vs.len() < 2 {
+        rejected.push(NestError::BadPart {
+            part: format!("{name} (polyline at line {line})"),
+            reason: "fewer than 2 vertices (zero size)".into(),
+        });
+    } else {
+        out.push(Contour { vertices: vs });
+    }
+}
+
+fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Contour>, rejected: &mut Vec<NestError>) {
+    let tol = DEFAULT_CHAIN_TOLERANCE;
+    let close = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]) <= tol;
+    while let Some(first) = segs.pop() {
+        let mut chain = vec![first];
+        loop {
+            let end = chain[chain.len() - 1].b;
+            if close(end, chain[0].a) {
+                break;
+            }
+            let next = segs.iter().position(|s| close(s.a, end) || close(s.b, end));
+            match next {
+                Some(k) => {
+                    let s = segs.swap_remove(k);
+                    chain.push(if close(s.a, end) {
+                        s
+                    } else {
+                        Seg {
+                            a: s.b,
+                            b: s.a,
+                            bulge: -s.bulge,
+                        }
+                    });
+                }
+                None => break,
+            }
+        }
+        if close(chain[chain.len() - 1].b, chain[0].a) {
+            out.push(Contour {
+                vertices: chain
+                    .iter()
+                    .map(|s| Vertex {
+                        x: s.a[0],
+                        y: s.a[1],
+                        bulge: s.bulge,
+                    })
+                    .collect(),
+            });
+        } else {
+            let p = chain[0].a;
+            rejected.push(NestError::BadPart {
+                part: format!("{name} (LINE/ARC chain from ({:.3}, {:.3}))", p[0], p[1]),
+                reason: "open contour".into(),
+            });
+        }
+    }
+}
+
+fn point_in(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
+    let mut inside = false;
+    let n = poly.len();
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        if (a[1] > p[1]) != (b[1] > p[1]) {
+            let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if p[0] < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+fn group(contours: Vec<Contour>, name: &str) -> Vec<Part> {
+    let tol = 0.01;
+    let flat: Vec<Vec<[f64; 2]>> = contours.iter().map(|c| c.flatten(tol)).collect();
+    let area: Vec<f64> = flat.iter().map(|f| polygon_area(f).abs()).collect();
+    let mut idx: Vec<usize> = (0..contours.len()).collect();
+    idx.sort_by(|&a, &b| area[b].total_cmp(&area[a]));
+    // parent = smallest larger contour containing the first vertex
+    let mut parent = vec![None; contours.len()];
+    for (k, &c) in idx.iter().enumerate() {
+        let probe = flat[c][0];
+        for &o in idx[..k].iter().rev() {
+            if point_in(probe, &flat[o]) {
+                parent[c] = Some(o);
+                break;
+            }
+        }
+    }
+    let depth = |mut c: usize| {
+        let mut d = 0;
+        while let Some(p) = parent[c] {
+            d += 1;
+            c = p;
+        }
+        d
+    };
+    let outers: Vec<usize> = idx.iter().copied().filter(|&c| depth(c) % 2 == 0).collect();
+    let single = outers.len() == 1;
+    outers
+        .iter()
+        .enumerate()
+        .map(|(k, &o)| Part {
+            id: if single {
+                name.to_string()
+            } else {
+                format!("{name}#{}", k + 1)
+            },
+            outer: contours[o].clone(),
+            holes: idx
+                .iter()
+                .filter(|&&h| parent[h] == Some(o))
+                .map(|&h| contours[h].clone())
+                .collect(),
+        })
+        .collect()
+}

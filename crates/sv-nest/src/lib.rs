@@ -1,0 +1,67 @@
+//! Nesting of plasma-cut parts on the jagua-rs collision engine.
+//!
+//! * [`nest_strip`]: strip packing (fixed height, minimise length) for benchmark instances.
+//! * [`nest_sheets`]: bin packing of [`Part`]s onto rectangular stock sheets with spacing and
+//!   margin, producing [`NestReport`] (`nest.json`).
+//! * [`dxf`]: reader for closed-contour DXF parts; [`svg`]: previews.
+//!
+//! The library never prints; long runs report through a caller-supplied progress callback.
+
+pub mod dxf;
+mod engine;
+pub mod part;
+pub mod sheets;
+pub mod strip;
+pub mod svg;
+
+pub use part::{Contour, Part, Vertex, DEFAULT_FLATTEN_TOLERANCE};
+pub use sheets::{
+    lower_bounds, nest_sheets, LowerBounds, NestOptions, NestReport, Offcut, PartPlacement,
+    RotationMode, SheetReport, SheetSpec, StockSheet,
+};
+pub use strip::{nest_strip, Progress, StripInstance, StripOptions, StripPlacement, StripResult};
+
+/// Errors of the nesting crate. Part errors name the part.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NestError {
+    /// A part outline is unusable (open, self-intersecting, zero size, non-finite).
+    #[error("part {part}: {reason}")]
+    BadPart {
+        /// part id
+        part: String,
+        /// what is wrong
+        reason: String,
+    },
+    /// A part does not fit on any stock sheet in any allowed rotation.
+    #[error("part {part}: larger than every sheet ({width:.1} x {height:.1} mm with spacing)")]
+    TooLarge {
+        /// part id
+        part: String,
+        /// bounding box width of the part
+        width: f64,
+        /// bounding box height of the part
+        height: f64,
+    },
+    /// Unreadable or invalid DXF.
+    #[error("{file}: {message}")]
+    Dxf {
+        /// file name
+        file: String,
+        /// what is wrong (with line number when known)
+        message: String,
+    },
+    /// Invalid options.
+    #[error("invalid options: {0}")]
+    Options(String),
+    /// Invalid benchmark instance.
+    #[error("instance: {0}")]
+    Instance(String),
+    /// I/O failure.
+    #[error("{path}: {message}")]
+    Io {
+        /// path
+        path: String,
+        /// error text
+        message: String,
+    },
+}

@@ -1,0 +1,248 @@
+//! Strip packing: fixed height, minimise the used length (ESICUP / jagua-rs `spp` instances).
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Duration;
+
+use jagua_rs::entities::Item;
+use jagua_rs::io::export::int_to_ext_transformation;
+use jagua_rs::io::import::Importer;
+use jagua_rs::probs::spp::io::ext_repr::ExtSPInstance;
+use rand::SeedableRng;
+use serde::{Deserialize, Serialize};
+
+use crate::engine::{rect, Bin, Budget, Rng64, CDE_CONFIG};
+use crate::NestError;
+
+/// A strip-packing instance: items with demands and a fixed strip height.
+#[derive(Clone, Debug)]
+pub struct StripInstance {
+    /// instance name
+    pub name: String,
+    /// strip height (y extent)
+    pub height: f32,
+    /// minimum distance between items and from the strip border
+    pub min_item_separation: f32,
+    /// items (jagua-rs, already inflated by half the separation) and their demands
+    pub items: Vec<(Arc<Item>, usize)>,
+}
+
+impl StripInstance {
+    /// Parses a jagua-rs >= 1.0 `ExtSPInstance` JSON string.
+    pub fn from_json(text: &str) -> Result<Self, NestError> {
+        let ext: ExtSPInstance =
+            serde_json::from_str(text).map_err(|e| NestError::Instance(e.to_string()))?;
+        let importer = Importer::new(CDE_CONFIG, None, None);
+        let inst = jagua_rs::probs::spp::io::import_instance(&importer, &ext)
+            .map_err(|e| NestError::Instance(format!("{}: {e:#}", ext.name)))?;
+        Ok(Self {
+            name: ext.name,
+            height: ext.strip_height,
+            min_item_separation: ext.min_item_separation,
+            items: inst.items,
+        })
+    }
+
+    /// Reads an instance file.
+    pub fn read(path: &Path) -> Result<Self, NestError> {
+        let text = std::fs::read_to_string(path).map_err(|e| NestError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Self::from_json(&text)
+    }
+
+    /// Total item area (original shapes, with demands).
+    pub fn item_area(&self) -> f64 {
+        self.items
+            .iter()
+            .map(|(i, q)| f64::from(i.area()) * *q as f64)
+            .sum()
+    }
+}
+
+/// Options of [`nest_strip`].
+#[derive(Clone, Debug)]
+pub struct StripOptions {
+    /// RNG seed; same seed and same evaluation budget give the same layout
+    pub seed: u64,
+    /// wall-clock budget
+    pub time_limit: Duration,
+    /// optional cap on collision evaluations (deterministic budget)
+    pub max_evaluations: Option<u64>,
+    /// samples per item in the constructive phase
+    pub construct_samples: usize,
+}
+
+/// Default wall-clock budget of [`StripOptions`].
+pub const DEFAULT_STRIP_SECONDS: u64 = 10;
+
+impl Default for StripOptions {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            time_limit: Duration::from_secs(DEFAULT_STRIP_SECONDS),
+            max_evaluations: None,
+            construct_samples: 400,
+        }
+    }
+}
+
+/// Progress report passed to the caller's callback.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Progress {
+    /// seconds since start
+    pub elapsed_s: f64,
+    /// collision evaluations so far
+    pub evaluations: u64,
+    /// best objective so far (strip length, or number of sheets)
+    pub best: f64,
+    /// density / utilisation of the best solution
+    pub density: f64,
+}
+
+/// One placed item of a strip solution (transformation of the item's original coordinates).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct StripPlacement {
+    /// external item id from the instance
+    pub item_id: u64,
+    /// rotation (degrees, counter-clockwise, about the original origin)
+    pub rotation_deg: f64,
+    /// translation applied after the rotation
+    pub translation: [f64; 2],
+}
+
+/// Result of [`nest_strip`].
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct StripResult {
+    /// instance name
+    pub name: String,
+    /// strip height
+    pub height: f64,
+    /// used strip length
+    pub length: f64,
+    /// item area / (height x length)
+    pub density: f64,
+    /// one placement per demanded item copy
+    pub placements: Vec<StripPlacement>,
+    /// collision evaluations used
+    pub evaluations: u64,
+    /// seconds used
+    pub elapsed_s: f64,
+}
+
+/// Strip packing: constructive bottom-left-fill, then repeatedly shrink the strip and separate
+/// the overlapping items (guided local search); the best feasible layout is kept (anytime).
+pub fn nest_strip(
+    inst: &StripInstance,
+    opts: &StripOptions,
+    progress: &mut dyn FnMut(&Progress),
+) -> StripResult {
+    let mut rng = Rng64::seed_from_u64(opts.seed);
+    let mut budget = Budget::new(opts.time_limit, opts.max_evaluations);
+    let sep = inst.min_item_separation;
+    let h = inst.height;
+    // copies, largest (convex hull area x diameter) first
+    let mut copies: Vec<(usize, Arc<Item>)> = inst
+        .items
+        .iter()
+        .flat_map(|(it, q)| std::iter::repeat_n(Arc::clone(it), *q))
+        .enumerate()
+        .collect();
+    let key = |it: &Item| {
+        let s = it.shape_cd();
+        s.surrogate().convex_hull_area * s.diameter()
+    };
+    copies.sort_by(|a, b| key(&b.1).total_cmp(&key(&a.1)).then(a.0.cmp(&b.0)));
+    let total_len: f32 = copies
+        .iter()
+        .map(|(_, it)| it.shape_cd().diameter())
+        .sum::<f32>()
+        + sep;
+    let inset = sep / 2.0;
+    let mut bin = Bin::new(rect(inset, inset, total_len, h - inset));
+    for (inst_idx, item) in &copies {
+        let x_limit = bin.used_x_max() + item.shape_cd().diameter();
+        let dt = bin
+            .blf_position(item, opts.construct_samples, x_limit, &mut rng, &mut budget)
+            .or_else(|| bin.blf_position(item, 4000, f32::MAX, &mut rng, &mut budget))
+            .expect("an item fits in the initial strip");
+        bin.add(*inst_idx, item, dt);
+    }
+    let item_area = inst.item_area();
+    let density_of = |len: f32| item_area / (f64::from(h) * f64::from(len));
+    let fit = |bin: &mut Bin| {
+        // a hair of slack: touching the container edge counts as a collision in jagua-rs
+        let x = bin.used_x_max();
+        let x = x + (x.abs() * 1e-5).max(1e-5);
+        bin.set_bounds(rect(inset, inset, x, h - inset));
+        x + inset
+    };
+    let mut best_len = fit(&mut bin);
+    let mut best = bin.save();
+    progress(&Progress {
+        elapsed_s: budget.elapsed().as_secs_f64(),
+        evaluations: budget.evals,
+        best: f64::from(best_len),
+        density: density_of(best_len),
+    });
+    let mut ratio: f32 = 0.01;
+    while !budget.done() {
+        let target = (best_len - inset) * (1.0 - ratio);
+        bin.set_bounds(rect(inset, inset, target, h - inset));
+        for i in 0..bin.members.len() {
+            let sb = bin.placed_shape(i).bbox();
+            if sb.x_max > target {
+                let dt = bin.members[i].dt;
+                let (tx, ty) = dt.translation();
+                let shift = sb.x_max - target;
+                let nt = (tx - shift, ty);
+                bin.relocate(
+                    i,
+                    jagua_rs::geometry::DTransformation::new(dt.rotation(), nt),
+                );
+            }
+        }
+        if bin.separate(&mut rng, &mut budget, 3, 40) {
+            best_len = fit(&mut bin);
+            best = bin.save();
+            progress(&Progress {
+                elapsed_s: budget.elapsed().as_secs_f64(),
+                evaluations: budget.evals,
+                best: f64::from(best_len),
+                density: density_of(best_len),
+            });
+        } else {
+            bin.restore(&best);
+            ratio = (ratio * 0.7).max(0.001);
+        }
+    }
+    bin.restore(&best);
+    debug_assert!(bin.is_feasible());
+    let mut placements: Vec<(usize, StripPlacement)> = bin
+        .members
+        .iter()
+        .map(|m| {
+            let ext = int_to_ext_transformation(&m.dt, &m.item.shape_orig().pre_transform);
+            let (tx, ty) = ext.translation();
+            (
+                m.inst,
+                StripPlacement {
+                    item_id: m.item.external_id(),
+                    rotation_deg: f64::from(ext.rotation().to_degrees()),
+                    translation: [f64::from(tx), f64::from(ty)],
+                },
+            )
+        })
+        .collect();
+    placements.sort_by_key(|p| p.0);
+    StripResult {
+        name: inst.name.clone(),
+        height: f64::from(h),
+        length: f64::from(best_len),
+        density: density_of(best_len),
+        placements: placements.into_iter().map(|p| p.1).collect(),
+        evaluations: budget.evals,
+        elapsed_s: budget.elapsed().as_secs_f64(),
+    }
+}

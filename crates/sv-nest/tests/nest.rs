@@ -1,0 +1,384 @@
+//! Integration tests: sheet invariants checked independently of jagua-rs, determinism, bad
+//! parts, DXF reading, and an ESICUP instance.
+
+use std::time::Duration;
+
+use sv_nest::part::segments_intersect;
+use sv_nest::{
+    nest_sheets, nest_strip, Contour, NestOptions, NestReport, Part, StockSheet, StripInstance,
+    StripOptions, Vertex,
+};
+
+const FINE: f64 = 0.005;
+
+fn rounded_rect(id: &str, w: f64, h: f64, r: f64) -> Part {
+    let b = (std::f64::consts::FRAC_PI_2 / 4.0).tan();
+    let v = |x: f64, y: f64, bulge: f64| Vertex { x, y, bulge };
+    Part {
+        id: id.into(),
+        outer: Contour {
+            vertices: vec![
+                v(r, 0.0, 0.0),
+                v(w - r, 0.0, b),
+                v(w, r, 0.0),
+                v(w, h - r, b),
+                v(w - r, h, 0.0),
+                v(r, h, b),
+                v(0.0, h - r, 0.0),
+                v(0.0, r, b),
+            ],
+        },
+        holes: vec![Contour::circle(w / 2.0, h / 2.0, r.min(h / 4.0))],
+    }
+}
+
+fn test_parts() -> Vec<Part> {
+    let mut parts = Vec::new();
+    for k in 0..6 {
+        parts.push(Part::new(
+            format!("rect{k}"),
+            Contour::polygon(&[
+                [0.0, 0.0],
+                [180.0, 0.0],
+                [180.0, 60.0 + 10.0 * k as f64],
+                [0.0, 60.0 + 10.0 * k as f64],
+            ]),
+        ));
+    }
+    for k in 0..5 {
+        parts.push(Part::new(
+            format!("ell{k}"),
+            Contour::polygon(&[
+                [0.0, 0.0],
+                [150.0, 0.0],
+                [150.0, 40.0],
+                [40.0, 40.0],
+                [40.0, 120.0],
+                [0.0, 120.0],
+            ]),
+        ));
+    }
+    for k in 0..5 {
+        parts.push(rounded_rect(&format!("round{k}"), 200.0, 90.0, 20.0));
+    }
+    for k in 0..4 {
+        parts.push(Part::new(
+            format!("disc{k}"),
+            Contour::circle(500.0, 500.0, 45.0),
+        ));
+    }
+    parts
+}
+
+fn small_opts() -> NestOptions {
+    NestOptions {
+        sheets: vec![StockSheet {
+            width: 600.0,
+            height: 400.0,
+        }],
+        margin: 10.0,
+        spacing: 6.0,
+        time_limit: Duration::from_secs(600),
+        max_evaluations: Some(150_000),
+        construct_samples: 150,
+        ..NestOptions::default()
+    }
+}
+
+fn seg_dist(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let l2 = dx * dx + dy * dy;
+    let t = if l2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a[0] + t * dx - p[0]).hypot(a[1] + t * dy - p[1])
+}
+
+fn point_in(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
+    let mut inside = false;
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        if (a[1] > p[1]) != (b[1] > p[1])
+            && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
+        {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// Minimum distance between two polygons (0 if they intersect or one contains the other).
+fn poly_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    if point_in(a[0], b) || point_in(b[0], a) {
+        return 0.0;
+    }
+    let mut d = f64::MAX;
+    for i in 0..a.len() {
+        let (a0, a1) = (a[i], a[(i + 1) % a.len()]);
+        for j in 0..b.len() {
+            let (b0, b1) = (b[j], b[(j + 1) % b.len()]);
+            if segments_intersect(a0, a1, b0, b1) {
+                return 0.0;
+            }
+            d = d
+                .min(seg_dist(a0, a1, b0))
+                .min(seg_dist(a0, a1, b1))
+                .min(seg_dist(b0, b1, a0))
+                .min(seg_dist(b0, b1, a1));
+        }
+    }
+    d
+}
+
+/// Checks every invariant of a sheet report against the original parts.
+fn check_report(parts: &[Part], report: &NestReport, opts: &NestOptions, expect_left_out: &[&str]) {
+    let mut seen: Vec<&str> = Vec::new();
+    for sheet in &report.sheets {
+        let placed: Vec<Vec<[f64; 2]>> = sheet
+            .placements
+            .iter()
+            .map(|pl| {
+                seen.push(&pl.strip);
+                let part = parts.iter().find(|p| p.id == pl.strip).expect("known id");
+                part.transformed(pl.rotation_deg, pl.translation)
+                    .outer
+                    .flatten(FINE)
+            })
+            .collect();
+        for (k, poly) in placed.iter().enumerate() {
+            for p in poly {
+                assert!(
+                    p[0] >= opts.margin - 1e-6
+                        && p[1] >= opts.margin - 1e-6
+                        && p[0] <= sheet.width - opts.margin + 1e-6
+                        && p[1] <= sheet.height - opts.margin + 1e-6,
+                    "{} outside margin at {p:?}",
+                    sheet.placements[k].strip
+                );
+            }
+            for (l, other) in placed.iter().enumerate().skip(k + 1) {
+                let d = poly_distance(poly, other);
+                assert!(
+                    d >= opts.spacing - 1e-3,
+                    "{} and {} are {d} apart",
+                    sheet.placements[k].strip,
+                    sheet.placements[l].strip
+                );
+            }
+        }
+        assert!(sheet.utilisation > 0.0 && sheet.utilisation <= 1.0);
+    }
+    for p in parts {
+        let n = seen.iter().filter(|s| **s == p.id).count();
+        if expect_left_out.contains(&p.id.as_str()) {
+            assert_eq!(n, 0, "{} should be left out", p.id);
+            assert!(report
+                .left_out
+                .iter()
+                .any(|l| l.part == p.id && l.reason.contains(&p.id)));
+        } else {
+            assert_eq!(n, 1, "{} placed {n} times", p.id);
+        }
+    }
+    assert_eq!(report.left_out.len(), expect_left_out.len());
+    assert!(report.lower_bound_sheets <= report.sheets.len());
+    assert_eq!(
+        report.lower_bound_sheets,
+        report
+            .lower_bounds
+            .area
+            .max(report.lower_bounds.martello_toth)
+    );
+}
+
+#[test]
+fn sheets_respect_margin_spacing_and_place_each_part_once() {
+    let parts = test_parts();
+    let opts = small_opts();
+    let report = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+    assert!(report.sheets.len() >= 2);
+    check_report(&parts, &report, &opts, &[]);
+    let off = report.offcut.as_ref().expect("offcut");
+    assert_eq!(off.sheet, report.sheets.len() - 1);
+    assert!(off.width >= 0.0 && off.x + off.width <= 600.0 + 1e-9);
+    // offcut does not intersect any part of the last sheet
+    let last = report.sheets.last().unwrap();
+    for pl in &last.placements {
+        let part = parts.iter().find(|p| p.id == pl.strip).unwrap();
+        for p in part
+            .transformed(pl.rotation_deg, pl.translation)
+            .outer
+            .flatten(FINE)
+        {
+            assert!(p[0] <= off.x + 1e-6);
+        }
+    }
+    // nest.json shape
+    let json = serde_json::to_value(&report).unwrap();
+    for key in [
+        "sheet",
+        "sheets",
+        "lower_bound_sheets",
+        "left_out",
+        "offcut",
+    ] {
+        assert!(json.get(key).is_some(), "{key}");
+    }
+    let pl = &json["sheets"][0]["placements"][0];
+    assert!(
+        pl["strip"].is_string() && pl["translation"].is_array() && pl["rotation_deg"].is_number()
+    );
+    assert!(json["sheet"]["spacing"].is_number() && json["sheets"][0]["utilisation"].is_number());
+}
+
+#[test]
+fn free_rotation_and_two_stock_sizes() {
+    let parts: Vec<Part> = test_parts().into_iter().take(10).collect();
+    let opts = NestOptions {
+        sheets: vec![
+            StockSheet {
+                width: 400.0,
+                height: 300.0,
+            },
+            StockSheet {
+                width: 600.0,
+                height: 400.0,
+            },
+        ],
+        rotations: sv_nest::RotationMode::Continuous,
+        max_evaluations: Some(60_000),
+        ..small_opts()
+    };
+    let report = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+    check_report(&parts, &report, &opts, &[]);
+}
+
+#[test]
+fn same_seed_same_budget_same_layout() {
+    let parts: Vec<Part> = test_parts().into_iter().take(12).collect();
+    let opts = NestOptions {
+        max_evaluations: Some(40_000),
+        ..small_opts()
+    };
+    let a = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+    let b = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+    assert_eq!(a, b);
+    let inst = StripInstance::read(&dataset("jakobs1")).unwrap();
+    let so = StripOptions {
+        time_limit: Duration::from_secs(600),
+        max_evaluations: Some(30_000),
+        ..StripOptions::default()
+    };
+    let r1 = nest_strip(&inst, &so, &mut |_| {});
+    let r2 = nest_strip(&inst, &so, &mut |_| {});
+    assert_eq!(r1.placements, r2.placements);
+    assert_eq!(r1.length, r2.length);
+}
+
+#[test]
+fn bad_parts_are_reported_and_skipped() {
+    let mut parts: Vec<Part> = test_parts().into_iter().take(6).collect();
+    parts.push(Part::new(
+        "bowtie",
+        Contour::polygon(&[[0.0, 0.0], [50.0, 50.0], [50.0, 0.0], [0.0, 50.0]]),
+    ));
+    parts.push(Part::new(
+        "flat",
+        Contour::polygon(&[[0.0, 0.0], [50.0, 0.0], [100.0, 0.0]]),
+    ));
+    parts.push(Part::new("empty", Contour::default()));
+    parts.push(Part::new(
+        "huge",
+        Contour::polygon(&[[0.0, 0.0], [2000.0, 0.0], [2000.0, 30.0], [0.0, 30.0]]),
+    ));
+    let opts = small_opts();
+    let report = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+    check_report(&parts, &report, &opts, &["bowtie", "flat", "empty", "huge"]);
+    let huge = report.left_out.iter().find(|l| l.part == "huge").unwrap();
+    assert!(
+        huge.reason.contains("larger than every sheet"),
+        "{}",
+        huge.reason
+    );
+    let bow = report.left_out.iter().find(|l| l.part == "bowtie").unwrap();
+    assert!(bow.reason.contains("self-intersecting"));
+}
+
+#[test]
+fn lower_bounds_count_big_parts() {
+    // three parts each above half a bin: MT says 3, area says 2
+    let lb = sv_nest::lower_bounds(&[0.6, 0.6, 0.6], 1.0);
+    assert_eq!(lb.area, 2);
+    assert_eq!(lb.martello_toth, 3);
+    let lb = sv_nest::lower_bounds(&[0.5, 0.5, 0.25], 1.0);
+    assert_eq!(lb.area, 2);
+    assert_eq!(lb.martello_toth, 2);
+}
+
+const DXF_LW: &str = "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n8\nOUTSIDE\n90\n4\n70\n1\n10\n0\n20\n0\n42\n0\n10\n100\n20\n0\n42\n1\n10\n100\n20\n50\n42\n0\n10\n0\n20\n50\n0\nCIRCLE\n8\nINSIDE\n10\n40\n20\n25\n40\n10\n0\nLWPOLYLINE\n70\n0\n10\n500\n20\n500\n10\n600\n20\n500\n0\nENDSEC\n0\nEOF\n";
+
+#[test]
+fn dxf_lwpolyline_with_bulge_and_circle_hole() {
+    let read = sv_nest::dxf::parse_parts(DXF_LW, "bracket").unwrap();
+    assert_eq!(read.parts.len(), 1);
+    let p = &read.parts[0];
+    assert_eq!(p.id, "bracket");
+    assert_eq!(p.outer.vertices.len(), 4);
+    assert_eq!(p.outer.vertices[1].bulge, 1.0);
+    assert_eq!(p.holes.len(), 1);
+    // the half-circle end reaches x = 125
+    let (_, hi) = sv_nest::part::bbox(&p.outer.flatten(0.01));
+    assert!((hi[0] - 125.0).abs() < 1e-6);
+    // the open polyline is rejected with a name
+    assert_eq!(read.rejected.len(), 1);
+    assert!(read.rejected[0].to_string().contains("open contour"));
+    assert!(read.rejected[0].to_string().contains("bracket"));
+}
+
+#[test]
+fn dxf_line_arc_chain_and_polyline() {
+    // a 40x20 slot: two lines and two half arcs, plus a POLYLINE square elsewhere
+    let text = "0\nSECTION\n2\nENTITIES\n\
+0\nLINE\n10\n0\n20\n0\n11\n40\n21\n0\n\
+0\nARC\n10\n40\n20\n10\n40\n10\n50\n270\n51\n90\n\
+0\nLINE\n10\n40\n20\n20\n11\n0\n21\n20\n\
+0\nARC\n10\n0\n20\n10\n40\n10\n50\n90\n51\n270\n\
+0\nPOLYLINE\n66\n1\n70\n1\n0\nVERTEX\n10\n100\n20\n0\n0\nVERTEX\n10\n130\n20\n0\n0\nVERTEX\n10\n130\n20\n30\n0\nVERTEX\n10\n100\n20\n30\n0\nSEQEND\n\
+0\nENDSEC\n0\nEOF\n";
+    let read = sv_nest::dxf::parse_parts(text, "mix").unwrap();
+    assert!(read.rejected.is_empty(), "{:?}", read.rejected);
+    assert_eq!(read.parts.len(), 2);
+    let areas: Vec<f64> = read
+        .parts
+        .iter()
+        .map(|p| sv_nest::part::polygon_area(&p.outer.flatten(0.001)).abs())
+        .collect();
+    let slot = 40.0 * 20.0 + std::f64::consts::PI * 100.0;
+    assert!(areas.iter().any(|a| (a - slot).abs() < 0.5), "{areas:?}");
+    assert!(areas.iter().any(|a| (a - 900.0).abs() < 1e-6), "{areas:?}");
+    // nests
+    let opts = small_opts();
+    let report = nest_sheets(&read.parts, &opts, &mut |_| {}).unwrap();
+    check_report(&read.parts, &report, &opts, &[]);
+    assert!(sv_nest::dxf::parse_parts("garbage\n", "bad").is_err());
+}
+
+fn dataset(name: &str) -> std::path::PathBuf {
+    std::path::PathBuf::from(format!("/work/shared/datasets/nesting/spp/{name}.json"))
+}
+
+#[test]
+fn esicup_fu_beats_lbf_with_small_budget() {
+    let inst = StripInstance::read(&dataset("fu")).unwrap();
+    let opts = StripOptions {
+        time_limit: Duration::from_secs(600),
+        max_evaluations: Some(400_000),
+        ..StripOptions::default()
+    };
+    let res = nest_strip(&inst, &opts, &mut |_| {});
+    assert_eq!(res.placements.len(), 12);
+    // lbf_seed0_density_pct for fu in best_known_spp.csv
+    assert!(res.density * 100.0 > 70.32, "density {}", res.density);
+}
