@@ -17,5 +17,7 @@ mod check;
 mod cli;
 #[path = "e2e/hygiene.rs"]
 mod hygiene;
+#[path = "e2e/nest.rs"]
+mod nest;
 #[path = "e2e/solve.rs"]
 mod solve;

@@ -51,6 +51,9 @@ pub enum Command {
     /// Re-verify every invariant of a frame.json and print a table.
     #[command(after_help = CHECK_EXAMPLES)]
     Check(CheckArgs),
+    /// Nest closed-contour DXF parts onto plasma sheets (or run a strip-packing instance).
+    #[command(after_help = NEST_EXAMPLES)]
+    Nest(NestArgs),
     /// Target surface to deployed frame: hub mesh, primary solve, files in DIR (default ./out).
     #[command(after_help = BUILD_EXAMPLES)]
     Build(BuildArgs),
@@ -70,6 +73,72 @@ Examples:
 Built-in targets: builtin:flat, builtin:vault, builtin:dome, builtin:saddle, builtin:pavilion.
 Writes DIR/mesh.obj (hub mesh), frame.json, frame.obj, report.json and timings.json, all or
 nothing. `spinvalence build --print-config` prints a config file with every default.";
+
+const NEST_EXAMPLES: &str = "\
+Examples:
+  # every closed contour in the DXF files is a part (contours inside others are holes)
+  spinvalence nest parts/*.dxf --sheet 3000x1500 --out out/nest
+
+  # two stock sizes, 8 mm margin, free rotation, one minute
+  spinvalence nest a.dxf b.dxf --sheet 3000x1500,2500x1250 --margin 8 --free-rotation --nest-seconds 60 --out out/n
+
+  # a strip-packing benchmark instance (jagua-rs JSON)
+  spinvalence nest ../shared/datasets/nesting/spp/fu.json --nest-seconds 60 --out out/fu
+
+Writes DIR/nest.json and DIR/sheets/sheet-NN.svg (or DIR/strip.json for an instance).
+Parts that cannot be nested (open or self-intersecting contours, larger than every sheet,
+unreadable files) are listed as left out; the others still nest. Same seed, same layout
+for the same budget.";
+
+/// `spinvalence nest`.
+#[derive(Debug, Args)]
+pub struct NestArgs {
+    /// DXF files with closed contours (mm), or one jagua-rs JSON strip-packing instance.
+    #[arg(value_name = "PARTS", required = true)]
+    pub parts: Vec<PathBuf>,
+    /// Sheet size WIDTHxHEIGHT in mm; several comma-separated sizes are stock sizes in order.
+    #[arg(long, default_value = "3000x1500")]
+    pub sheet: String,
+    /// Clear border along the sheet edges (mm).
+    #[arg(long, value_name = "MM", default_value_t = sv_nest::sheets::DEFAULT_MARGIN, allow_negative_numbers = true)]
+    pub margin: f64,
+    /// Plasma kerf (mm); the part spacing is kerf + clearance.
+    #[arg(
+        long,
+        value_name = "MM",
+        default_value_t = 1.3,
+        allow_negative_numbers = true
+    )]
+    pub kerf: f64,
+    /// Extra clearance between parts (mm).
+    #[arg(
+        long,
+        value_name = "MM",
+        default_value_t = 4.7,
+        allow_negative_numbers = true
+    )]
+    pub clearance: f64,
+    /// Allow any rotation (default: 0 and 180 degrees).
+    #[arg(long)]
+    pub free_rotation: bool,
+    /// Time budget in seconds (the best layout so far is kept).
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 10.0,
+        allow_negative_numbers = true
+    )]
+    pub nest_seconds: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
 
 /// `spinvalence build`.
 #[derive(Debug, Args)]

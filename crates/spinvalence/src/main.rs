@@ -8,6 +8,7 @@ mod build;
 mod check;
 mod cli;
 mod config;
+mod nest;
 mod output;
 mod solve;
 
@@ -66,6 +67,10 @@ fn run(cli: &Cli) -> Result<ExitCode> {
         } else {
             ExitCode::from(EXIT_VIOLATION)
         }),
+        Command::Nest(args) => {
+            nest::run(args)?;
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Build(args) => {
             if args.print_config {
                 output::print_out(&config::default_toml())?;

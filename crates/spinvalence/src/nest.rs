@@ -1,0 +1,231 @@
+//! `spinvalence nest`: nest closed-contour DXF parts onto sheets, or run a strip-packing
+//! benchmark instance (jagua-rs JSON), on its own.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Result};
+use sv_nest::sheets::LeftOut;
+use sv_nest::{NestOptions, Part, RotationMode, StockSheet, StripInstance, StripOptions};
+
+use crate::cli::NestArgs;
+use crate::output::{self, number, AtomicFiles};
+use crate::solve::{progress_bar, seconds};
+
+/// Parse `3000x1500` (mm); several sizes separated by commas are stock sizes in order.
+pub fn parse_sheets(text: &str) -> Result<Vec<StockSheet>> {
+    text.split(',')
+        .map(|one| {
+            let (w, h) = one.trim().split_once(['x', 'X']).ok_or_else(|| {
+                anyhow!("invalid --sheet {one:?}: expected WIDTHxHEIGHT in mm, e.g. 3000x1500")
+            })?;
+            let parse = |s: &str| {
+                s.trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite() && *v > 0.0)
+            };
+            match (parse(w), parse(h)) {
+                (Some(width), Some(height)) => Ok(StockSheet { width, height }),
+                _ => bail!(
+                    "invalid --sheet {one:?}: width and height must be positive lengths in mm"
+                ),
+            }
+        })
+        .collect()
+}
+
+/// Check the numeric options; one line naming the flag.
+fn check(args: &NestArgs) -> Result<()> {
+    for (flag, v) in [
+        ("--margin", args.margin),
+        ("--kerf", args.kerf),
+        ("--clearance", args.clearance),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            bail!("invalid {flag} {v}: must be a finite length >= 0 mm");
+        }
+    }
+    if !(args.nest_seconds.is_finite() && args.nest_seconds > 0.0) {
+        bail!("invalid --nest-seconds {}: must be > 0", args.nest_seconds);
+    }
+    if args.parts.is_empty() {
+        bail!("no parts given: name DXF files (or one jagua-rs JSON instance)");
+    }
+    Ok(())
+}
+
+/// Run `nest`.
+pub fn run(args: &NestArgs) -> Result<()> {
+    check(args)?;
+    let json: Vec<&Path> = args
+        .parts
+        .iter()
+        .map(|p| p.as_path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    if !json.is_empty() {
+        if args.parts.len() != 1 {
+            bail!("a JSON strip-packing instance is nested on its own: give exactly one file");
+        }
+        return run_strip(args, json[0]);
+    }
+    let sheets = parse_sheets(&args.sheet)?;
+    let mut parts: Vec<Part> = Vec::new();
+    let mut left_out: Vec<LeftOut> = Vec::new();
+    for path in &args.parts {
+        let name = path.display().to_string();
+        let text = match output::read_bytes(path) {
+            Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
+            Err(e) => {
+                left_out.push(LeftOut {
+                    part: name,
+                    reason: format!("{e:#}"),
+                });
+                continue;
+            }
+        };
+        match sv_nest::dxf::parse_parts(&text, &name) {
+            Ok(read) => {
+                parts.extend(read.parts);
+                left_out.extend(read.rejected.into_iter().map(|e| LeftOut {
+                    part: name.clone(),
+                    reason: e.to_string(),
+                }));
+            }
+            Err(e) => left_out.push(LeftOut {
+                part: name,
+                reason: e.to_string(),
+            }),
+        }
+    }
+    if parts.is_empty() {
+        let why = left_out
+            .first()
+            .map_or("no closed contours".to_string(), |l| l.reason.clone());
+        bail!("nothing to nest: {why}");
+    }
+    let files = AtomicFiles::create(&args.out, &["nest.json"])?;
+    let options = NestOptions {
+        sheets,
+        margin: args.margin,
+        spacing: args.kerf + args.clearance,
+        rotations: if args.free_rotation {
+            RotationMode::Continuous
+        } else {
+            RotationMode::default()
+        },
+        seed: args.seed,
+        time_limit: Duration::from_secs_f64(args.nest_seconds),
+        ..NestOptions::default()
+    };
+    let started = Instant::now();
+    let bar = progress_bar(args.quiet, args.nest_seconds.ceil() as usize, "nesting");
+    let report = sv_nest::nest_sheets(&parts, &options, &mut |p| {
+        bar.set_position(p.elapsed_s as u64);
+        bar.set_message(format!(
+            "{} sheet(s), {:.1} % used",
+            p.best,
+            100.0 * p.density
+        ));
+    });
+    bar.finish_and_clear();
+    let mut report = report.map_err(|e| anyhow!("{e}"))?;
+    report.left_out.extend(left_out);
+    let sheet_dir = args.out.join("sheets");
+    std::fs::create_dir_all(&sheet_dir)
+        .map_err(|e| anyhow!("{}: {}", sheet_dir.display(), output::io_message(&e)))?;
+    for i in 0..report.sheets.len() {
+        let svg = sv_nest::svg::sheet_svg(&report, &parts, i, sv_nest::DEFAULT_FLATTEN_TOLERANCE);
+        let path = sheet_dir.join(format!("sheet-{:02}.svg", i + 1));
+        std::fs::write(&path, svg)
+            .map_err(|e| anyhow!("{}: {}", path.display(), output::io_message(&e)))?;
+    }
+    let json = serde_json::to_string_pretty(&report)?;
+    files.commit(&[&json])?;
+    if !args.quiet {
+        let mut rows: Vec<Vec<String>> = vec![
+            vec!["parts".into(), parts.len().to_string()],
+            vec![
+                "sheets".into(),
+                format!(
+                    "{} (lower bound {})",
+                    report.sheets.len(),
+                    report.lower_bound_sheets
+                ),
+            ],
+        ];
+        for (i, s) in report.sheets.iter().enumerate() {
+            rows.push(vec![
+                format!("sheet {}", i + 1),
+                format!(
+                    "{} parts, {:.1} % used",
+                    s.placements.len(),
+                    100.0 * s.utilisation
+                ),
+            ]);
+        }
+        for l in &report.left_out {
+            rows.push(vec!["left out".into(), format!("{}: {}", l.part, l.reason)]);
+        }
+        rows.push(vec!["wall time".into(), seconds(started.elapsed())]);
+        output::print_out(&output::table(&rows))?;
+    }
+    Ok(())
+}
+
+fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
+    let text = output::read_text(path)?;
+    let inst = StripInstance::from_json(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let files = AtomicFiles::create(&args.out, &["strip.json"])?;
+    let bar = progress_bar(
+        args.quiet,
+        args.nest_seconds.ceil() as usize,
+        "strip packing",
+    );
+    let options = StripOptions {
+        seed: args.seed,
+        time_limit: Duration::from_secs_f64(args.nest_seconds),
+        ..StripOptions::default()
+    };
+    let result = sv_nest::nest_strip(&inst, &options, &mut |p| {
+        bar.set_position(p.elapsed_s as u64);
+        bar.set_message(format!(
+            "length {}, density {:.2} %",
+            number(p.best),
+            100.0 * p.density
+        ));
+    });
+    bar.finish_and_clear();
+    files.commit(&[&serde_json::to_string_pretty(&result)?])?;
+    if !args.quiet {
+        let rows = vec![
+            vec!["instance".into(), result.name.clone()],
+            vec![
+                "strip".into(),
+                format!("{} x {}", number(result.height), number(result.length)),
+            ],
+            vec!["density".into(), format!("{:.2} %", 100.0 * result.density)],
+            vec!["items".into(), result.placements.len().to_string()],
+            vec!["time".into(), format!("{:.1} s", result.elapsed_s)],
+        ];
+        output::print_out(&output::table(&rows))?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sheet_sizes_parse_and_bad_ones_name_the_flag() {
+        let s = parse_sheets("3000x1500, 2500X1250").unwrap();
+        assert_eq!(s.len(), 2);
+        assert_eq!((s[1].width, s[1].height), (2500.0, 1250.0));
+        for bad in ["3000", "0x1500", "-3x2", "axb", "3000x", "nanx10"] {
+            let e = parse_sheets(bad).unwrap_err().to_string();
+            assert!(e.contains("--sheet"), "{bad}: {e}");
+        }
+    }
+}

@@ -1,0 +1,149 @@
+//! `spinvalence nest`: DXF parts onto sheets, a benchmark instance, and bad input.
+
+use crate::util::{num, read_json, Dir};
+
+/// An ASCII DXF with one LWPOLYLINE outline per part (closed, optional bulges) and a circle hole.
+fn dxf(parts: &[(f64, f64, f64)]) -> String {
+    let mut s = String::from("0\nSECTION\n2\nENTITIES\n");
+    for &(x, w, h) in parts {
+        // a w x h plate with a half-round right end and a 10 mm hole
+        s += &format!(
+            "0\nLWPOLYLINE\n8\nOUTSIDE\n90\n4\n70\n1\n10\n{x}\n20\n0\n42\n0\n10\n{}\n20\n0\n42\n1\n10\n{}\n20\n{h}\n42\n0\n10\n{x}\n20\n{h}\n",
+            x + w,
+            x + w
+        );
+        s += &format!(
+            "0\nCIRCLE\n8\nINSIDE\n10\n{}\n20\n{}\n40\n10\n",
+            x + 30.0,
+            h / 2.0
+        );
+    }
+    s + "0\nENDSEC\n0\nEOF\n"
+}
+
+#[test]
+fn dxf_parts_nest_inside_the_sheet_and_open_contours_are_left_out() {
+    let dir = Dir::new();
+    dir.write("a.dxf", dxf(&[(0.0, 400.0, 150.0), (1000.0, 300.0, 120.0)]));
+    dir.write("b.dxf", dxf(&[(0.0, 500.0, 200.0)]));
+    // an open polyline is not a part
+    dir.write(
+        "open.dxf",
+        "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n70\n0\n10\n0\n20\n0\n10\n100\n20\n0\n10\n100\n20\n50\n0\nENDSEC\n0\nEOF\n",
+    );
+    let out = dir.run(&[
+        "nest",
+        "a.dxf",
+        "b.dxf",
+        "open.dxf",
+        "--sheet",
+        "1200x600",
+        "--nest-seconds",
+        "1",
+        "--out",
+        "n",
+    ]);
+    out.expect_code(0);
+    assert!(out.stdout.contains("left out"), "{out:?}");
+    let report = read_json(&dir.join("n/nest.json"));
+    let sheet = &report["sheet"];
+    let (w, h, margin) = (
+        num(&sheet["width"], "w"),
+        num(&sheet["height"], "h"),
+        num(&sheet["margin"], "m"),
+    );
+    assert_eq!((w, h), (1200.0, 600.0));
+    let placed: usize = report["sheets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["placements"].as_array().unwrap().len())
+        .sum();
+    assert_eq!(placed, 3, "every part placed exactly once");
+    let lb = report["lower_bound_sheets"].as_u64().unwrap();
+    assert!(lb as usize <= report["sheets"].as_array().unwrap().len());
+    for s in report["sheets"].as_array().unwrap() {
+        let u = num(&s["utilisation"], "utilisation");
+        assert!(u > 0.0 && u <= 1.0);
+        for p in s["placements"].as_array().unwrap() {
+            // the original outline's extent (plate + half-round end), moved as placed
+            let (x0, pw, ph) = match p["strip"].as_str().unwrap() {
+                "a.dxf#1" | "a.dxf" => (0.0, 400.0, 150.0),
+                "a.dxf#2" => (1000.0, 300.0, 120.0),
+                "b.dxf#1" | "b.dxf" => (0.0, 500.0, 200.0),
+                other => panic!("unknown part {other}"),
+            };
+            let t = p["translation"].as_array().unwrap();
+            let (tx, ty) = (num(&t[0], "x"), num(&t[1], "y"));
+            let a = num(&p["rotation_deg"], "rotation").to_radians();
+            for (x, y) in [
+                (x0, 0.0),
+                (x0 + pw + ph / 2.0, 0.0),
+                (x0, ph),
+                (x0 + pw + ph / 2.0, ph),
+            ] {
+                let (sx, sy) = (
+                    a.cos() * x - a.sin() * y + tx,
+                    a.sin() * x + a.cos() * y + ty,
+                );
+                assert!(
+                    sx >= margin - 1e-6 && sx <= w - margin + 1e-6,
+                    "{p}: x {sx}"
+                );
+                assert!(
+                    sy >= margin - 1e-6 && sy <= h - margin + 1e-6,
+                    "{p}: y {sy}"
+                );
+            }
+        }
+    }
+    let left = report["left_out"].as_array().unwrap();
+    assert!(
+        left.iter()
+            .any(|l| l["reason"].as_str().unwrap().contains("open")),
+        "{left:?}"
+    );
+    assert_eq!(
+        dir.entries("n/sheets").len(),
+        report["sheets"].as_array().unwrap().len()
+    );
+}
+
+#[test]
+fn strip_instance_reaches_a_real_density() {
+    let dir = Dir::new();
+    let fu = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/datasets/nesting/spp/fu.json"
+    );
+    let out = dir.run(&["nest", fu, "--nest-seconds", "2", "--out", "fu", "--quiet"]);
+    out.expect_code(0);
+    let r = read_json(&dir.join("fu/strip.json"));
+    let density = num(&r["density"], "density");
+    // above the jagua-rs lbf reference (70.32 %) in best_known_spp.csv
+    assert!(density > 0.7032 && density < 1.0, "{density}");
+    assert_eq!(r["placements"].as_array().unwrap().len(), 12);
+}
+
+#[test]
+fn bad_nest_input_is_one_line() {
+    let dir = Dir::new();
+    dir.write("a.dxf", dxf(&[(0.0, 400.0, 150.0)]));
+    dir.write("garbage.dxf", [0u8, 1, 2, 3, 250, 251]);
+    for (args, needle) in [
+        (vec!["a.dxf", "--sheet", "3000"], "--sheet"),
+        (vec!["a.dxf", "--sheet", "0x100"], "--sheet"),
+        (vec!["a.dxf", "--margin", "-1"], "--margin"),
+        (vec!["a.dxf", "--nest-seconds", "0"], "--nest-seconds"),
+        (vec!["garbage.dxf"], "nothing to nest"),
+        (vec!["missing.dxf"], "missing.dxf"),
+    ] {
+        let mut argv = vec!["nest"];
+        argv.extend(args.iter());
+        argv.extend(["--out", "o"]);
+        let out = dir.run(&argv);
+        out.expect_code(2);
+        assert!(out.one_error_line().contains(needle), "{needle}: {out:?}");
+        assert!(!dir.join("o/nest.json").exists());
+    }
+}
