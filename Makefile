@@ -28,7 +28,9 @@ bench: bench-primary
 	$(CARGO) bench --workspace
 
 ## The primary solve against the paper's SciPy SLSQP baseline, whole process against whole
-## process (needs python3; makes a venv with numpy and scipy in target/). UNITS=n sets the cap.
+## process, plus the 10,000-unit case (needs python3; makes a venv with numpy and scipy in
+## target/bench-venv). UNITS=n sets the n x n baseline frames, BENCH_FULL=1 adds SLSQP on the
+## 12 x 12 fixtures. Table in target/bench/primary.md, figures in docs/benchmarks.md.
 bench-primary:
 	bash bench/primary_vs_slsqp.sh
 

@@ -136,6 +136,18 @@ pub struct Solved {
 const THETA_BOUNDS: (Real, Real) = (0.05, 1.5);
 const PHI_BOUNDS: (Real, Real) = (-1.2, 1.2);
 
+/// Largest theta the solver lets a unit reach: [`THETA_BOUNDS`], and short of the first
+/// degenerate configuration `theta = 2 atan(min(a, b) / max(a, b))` of its rhombus, where
+/// the deployment direction vanishes and the side flips (docs/geometry.md, 1.6).
+fn theta_max(hub: &Hub) -> Real {
+    let (a, b) = (hub.rhombus.a(), hub.rhombus.b());
+    let k = a.min(b) / a.max(b);
+    THETA_BOUNDS
+        .1
+        .min(2.0 * k.atan() - 0.02)
+        .max(THETA_BOUNDS.0)
+}
+
 /// Solve the primary surface of a quad mesh of hubs. The mesh is validated first.
 pub fn solve(
     mesh: &QuadMesh,
@@ -152,7 +164,9 @@ pub fn solve(
     let n = hubs.len();
     let mut deployments: Vec<Deployment> = (0..n)
         .map(|f| Deployment {
-            theta: options.spin_angle.clamp(THETA_BOUNDS.0, THETA_BOUNDS.1),
+            theta: options
+                .spin_angle
+                .clamp(THETA_BOUNDS.0, theta_max(&hubs[f])),
             phi: 0.0,
             case: options.axis_case.unwrap_or_default(),
             side: sides[f],
@@ -697,7 +711,7 @@ impl<'a> Lm<'a> {
                         .enumerate()
                         .map(|(u, d)| Deployment {
                             theta: (d.theta + fraction * rhs[(2 * u, 0)])
-                                .clamp(THETA_BOUNDS.0, THETA_BOUNDS.1),
+                                .clamp(THETA_BOUNDS.0, theta_max(&p.hubs[u])),
                             phi: (d.phi + fraction * rhs[(2 * u + 1, 0)])
                                 .clamp(PHI_BOUNDS.0, PHI_BOUNDS.1),
                             ..*d

@@ -57,10 +57,12 @@ pub enum AxisCase {
     OrthogonalToR2,
 }
 
-/// The sign of `P` along `d = (R r1 - r2) x (R r2 + r1)`. `d` is continuous over the
-/// domain and equals `2 r1 x r2` (the tile normal, `+z`) at `theta = 0`, so
-/// [`Side::HubPositive`] deploys the hub to the `+z` side of the primary tile near the flat
-/// state, and [`Side::HubNegative`] to the `-z` side.
+/// The sign of `P` along `d = (R r1 - r2) x (R r2 + r1)`. `d` is continuous in
+/// `(theta, phi)` and equals `2 r1 x r2` (the tile normal, `+z`) at `theta = 0`, but it
+/// vanishes on the degenerate curve `cos(phi) = (a/b) cot(theta/2)` of a rhombus with
+/// half-diagonals `a`, `b` (see docs/geometry.md), where the side is undefined. Near the
+/// flat state [`Side::HubPositive`] deploys the hub to the `+z` side of the primary tile and
+/// [`Side::HubNegative`] to the `-z` side.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Side {

@@ -1,0 +1,67 @@
+#!/usr/bin/env python3
+"""Write benchmark hub meshes as OBJ quad meshes (mm, 1-based, faces counter-clockwise).
+
+The formulas are those of sv_frame::QuadMesh::sphere_cap and QuadMesh::translational, so a
+mesh written here is the mesh the Rust constructors build (up to the last bit of libm).
+
+usage: make_meshes.py cap NX NY RADIUS SPACING OUT.obj
+       make_meshes.py saddle NX NY SPACING R OUT.obj      # z = x^2/(2R) - y^2/(2R)
+"""
+import math
+import sys
+
+
+def grid(nx, ny, position):
+    verts = [position(i, j) for j in range(ny + 1) for i in range(nx + 1)]
+    vid = lambda i, j: j * (nx + 1) + i
+    faces = [(vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1))
+             for j in range(ny) for i in range(nx)]
+    return verts, faces
+
+
+def sphere_cap(nx, ny, radius, spacing):
+    step = spacing / radius
+    u0, v0 = nx * step / 2, ny * step / 2
+
+    def pos(i, j):
+        lon, lat = i * step - u0, j * step - v0
+        return (radius * math.cos(lat) * math.sin(lon), radius * math.sin(lat),
+                radius * math.cos(lat) * math.cos(lon) - radius)
+    return grid(nx, ny, pos)
+
+
+def saddle(nx, ny, spacing, r):
+    x0, y0 = nx * spacing / 2, ny * spacing / 2
+
+    def pos(i, j):
+        x, y = i * spacing - x0, j * spacing - y0
+        return (x, y, x * x / (2 * r) - y * y / (2 * r))
+    return grid(nx, ny, pos)
+
+
+def write(path, about, mesh):
+    verts, faces = mesh
+    with open(path, "w") as f:
+        f.write(f"# {about}\n# quad mesh, units: mm, {len(verts)} vertices, {len(faces)} faces\n")
+        for v in verts:
+            f.write("v %r %r %r\n" % v)
+        for q in faces:
+            f.write("f %d %d %d %d\n" % tuple(k + 1 for k in q))
+
+
+def main(argv):
+    kind = argv[1]
+    if kind == "cap":
+        nx, ny, radius, spacing, out = int(argv[2]), int(argv[3]), float(argv[4]), float(argv[5]), argv[6]
+        write(out, f"sphere cap {nx} x {ny}, R = {radius} mm, spacing {spacing} mm",
+              sphere_cap(nx, ny, radius, spacing))
+    elif kind == "saddle":
+        nx, ny, spacing, r, out = int(argv[2]), int(argv[3]), float(argv[4]), float(argv[5]), argv[6]
+        write(out, f"saddle {nx} x {ny}, z = (x^2 - y^2)/(2 x {r}) mm, spacing {spacing} mm",
+              saddle(nx, ny, spacing, r))
+    else:
+        sys.exit(__doc__)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
