@@ -2,11 +2,13 @@
 
 use crate::util::{num, read_json, Dir};
 
-const FILES: [&str; 5] = [
+const FILES: [&str; 7] = [
     "frame.json",
     "frame.obj",
     "mesh.obj",
     "report.json",
+    "strips",
+    "strips.json",
     "timings.json",
 ];
 
@@ -25,11 +27,12 @@ fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
         "gap sum",
         "hub overlap",
         "time secondary / primary",
+        "strips",
     ] {
         assert!(out.stdout.contains(row), "summary lacks {row}:{out:?}");
     }
     let timings = read_json(&dir.join("out/timings.json"));
-    for stage in ["secondary", "primary", "total"] {
+    for stage in ["secondary", "primary", "strips", "total"] {
         let t = num(&timings[stage], stage);
         assert!(t > 0.0 && t.is_finite(), "{stage}: {t}");
     }
@@ -54,6 +57,114 @@ fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
     ])
     .expect_code(0);
     dir.run(&["check", "out/frame.json"]).expect_code(0);
+    check_strips(&dir, "out");
+}
+
+fn point(v: &serde_json::Value, what: &str) -> Vec<f64> {
+    v.as_array()
+        .unwrap_or_else(|| panic!("{what}: not an array"))
+        .iter()
+        .map(|x| num(x, what))
+        .collect()
+}
+
+fn dist(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// `DIR/strips.json` against `DIR/frame.json`, recomputed from the files alone: a partition
+/// of the units into strips, labels `<strip>-<nn>` in frame.json, every flat tile congruent
+/// with its expanded 3D primary tile to 0.01 mm, one DXF (R2000, mm, one closed LWPOLYLINE
+/// per contour) and one SVG per strip.
+fn check_strips(dir: &crate::util::Dir, out: &str) {
+    let frame = read_json(&dir.join(&format!("{out}/frame.json")));
+    let strips = read_json(&dir.join(&format!("{out}/strips.json")));
+    assert_eq!(strips["format"], "spin-valence/strips");
+    assert_eq!(strips["version"], 1);
+    assert_eq!(strips["length_unit"], "mm");
+    let e = num(&frame["params"]["expansion"], "expansion");
+    assert_eq!(num(&strips["params"]["expansion"], "e"), e);
+    for key in ["thickness", "kerf", "min_web"] {
+        assert!(num(&strips["params"][key], key) > 0.0, "{key}");
+    }
+    let units = frame["units"].as_array().unwrap();
+    let mut seen = vec![0; units.len()];
+    let mut files: Vec<String> = Vec::new();
+    for strip in strips["strips"].as_array().unwrap() {
+        let id = strip["id"].as_str().unwrap();
+        files.push(format!("{id}.dxf"));
+        files.push(format!("{id}.svg"));
+        let list: Vec<usize> = strip["units"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|u| u.as_u64().unwrap() as usize)
+            .collect();
+        let flat = strip["flat"].as_array().unwrap();
+        assert_eq!(flat.len(), list.len(), "{id}");
+        for (j, (&u, tile)) in list.iter().zip(flat).enumerate() {
+            seen[u] += 1;
+            assert_eq!(
+                units[u]["id"],
+                format!("{id}-{:02}", j + 1),
+                "label of unit {u}"
+            );
+            assert_eq!(units[u]["strip"], id);
+            assert_eq!(tile["unit"].as_u64(), Some(u as u64));
+            let p: Vec<Vec<f64>> = units[u]["primary"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|c| point(c, "primary"))
+                .collect();
+            let c: Vec<f64> = (0..3)
+                .map(|k| p.iter().map(|q| q[k]).sum::<f64>() / 4.0)
+                .collect();
+            let p: Vec<Vec<f64>> = p
+                .iter()
+                .map(|q| (0..3).map(|k| c[k] + e * (q[k] - c[k])).collect())
+                .collect();
+            let f: Vec<Vec<f64>> = tile["primary"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|c| point(c, "flat"))
+                .collect();
+            for i in 0..4 {
+                for k in (i + 1)..4 {
+                    let d = (dist(&p[i], &p[k]) - dist(&f[i], &f[k])).abs();
+                    assert!(d < 0.01, "{id} unit {u}: corners {i}-{k} off by {d} mm");
+                }
+            }
+        }
+        let area = num(&strip["area_mm2"], "area");
+        assert!(area > 0.0, "{id}");
+        let cuts = strip["cuts"].as_array().unwrap().len();
+        assert_eq!(cuts, 4 * list.len(), "{id}: four slots per unit");
+        let dxf = std::fs::read_to_string(dir.join(&format!("{out}/strips/{id}.dxf"))).unwrap();
+        let lines: Vec<&str> = dxf.lines().map(str::trim).collect();
+        let after = |key: &str| lines.iter().position(|l| *l == key).map(|i| lines[i + 2]);
+        assert_eq!(after("$ACADVER"), Some("AC1015"), "{id}");
+        assert_eq!(after("$INSUNITS"), Some("4"), "{id}");
+        assert_eq!(lines.last(), Some(&"EOF"), "{id}");
+        let closed_polylines = lines
+            .windows(2)
+            .filter(|w| w[0] == "0" && w[1] == "LWPOLYLINE")
+            .count();
+        assert!(closed_polylines > cuts, "{id}: outline, cuts and etching");
+        let svg = std::fs::read_to_string(dir.join(&format!("{out}/strips/{id}.svg"))).unwrap();
+        assert!(svg.contains(&format!("{id}-01")), "{id}: labels in the SVG");
+    }
+    assert!(
+        seen.iter().all(|&n| n == 1),
+        "every unit in exactly one strip"
+    );
+    files.sort();
+    assert_eq!(dir.entries(&format!("{out}/strips")), files);
 }
 
 #[test]
@@ -155,6 +266,9 @@ fn bad_build_input_is_one_line_and_writes_nothing() {
     dir.write("empty.obj", "");
     dir.write("garbage.stl", [0u8, 159, 146, 150, 7, 7, 7]);
     dir.write("typo.toml", "[secondary]\nunit_sise = 250.0\n");
+    dir.write("neck.toml", "[profile]\nneck_width = 25.0\n");
+    dir.write("slot.toml", "[profile]\nslot_width = 1.0\n");
+    dir.write("thin.toml", "[profile]\nthickness = 0.0\n");
     dir.write("nan.obj", "v 0 0 0\nv 1000 0 nan\nv 0 1000 0\nf 1 2 3\n");
     // a closed tetrahedron: no boundary
     dir.write(
@@ -169,6 +283,10 @@ fn bad_build_input_is_one_line_and_writes_nothing() {
         (vec!["--target", "closed.obj"], "closed.obj"),
         (vec!["--target", "builtin:nope"], "nope"),
         (vec!["--config", "typo.toml"], "typo.toml:2"),
+        (vec!["--config", "neck.toml"], "neck_width"),
+        (vec!["--config", "slot.toml"], "slot_width"),
+        (vec!["--config", "thin.toml"], "thickness"),
+        (vec!["--strip-direction", "w"], "strip direction"),
         (vec!["--unit-size", "0"], "unit size"),
         (vec!["--unit-size", "-300"], "unit size"),
         (vec!["--unit-size", "nan"], "unit size"),

@@ -11,13 +11,15 @@ use sv_surface::{SecondaryReport, TargetMesh};
 
 use crate::cli::BuildArgs;
 use crate::config::{self, BuildConfig};
-use crate::output::{self, number, AtomicFiles};
+use crate::output::{self, number, AtomicDir, AtomicFiles};
 use crate::solve::{progress_bar, seconds};
+use crate::strips;
 
-/// The files `build` writes; `frame.json` last.
-const FILES: [&str; 5] = [
+/// The files `build` writes beside `strips/`; `frame.json` last.
+const FILES: [&str; 6] = [
     "mesh.obj",
     "frame.obj",
+    "strips.json",
     "timings.json",
     "report.json",
     "frame.json",
@@ -30,6 +32,8 @@ pub struct Timings {
     pub secondary: f64,
     /// Primary-surface solve.
     pub primary: f64,
+    /// Strips: unrolling, cut profiles, design-rule check, DXF and SVG.
+    pub strips: f64,
     /// The whole command, reading and writing included.
     pub total: f64,
 }
@@ -58,12 +62,19 @@ pub fn resolve(args: &BuildArgs) -> Result<BuildConfig> {
     if let Some(out) = &args.out {
         cfg.out = out.clone();
     }
+    if let Some(direction) = args.strip_direction {
+        cfg.strips.direction = direction;
+    }
     let size = cfg.secondary.unit_size;
     if !(size.is_finite() && size > 0.0) {
         bail!("invalid unit size {size}: must be a positive length in mm");
     }
     cfg.secondary.check().map_err(|e| anyhow!("{e}"))?;
     cfg.primary.to_solve_options()?;
+    cfg.strips.to_options()?;
+    cfg.profile
+        .validate()
+        .map_err(|e| anyhow!("profile: {e}"))?;
     Ok(cfg)
 }
 
@@ -87,7 +98,9 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     let cfg = resolve(args)?;
     let solve_options = cfg.primary.to_solve_options()?;
     let target = load_target(&cfg.target)?;
+    let strip_options = cfg.strips.to_options()?;
     let files = AtomicFiles::create(&cfg.out, &FILES)?;
+    let strips_dir = AtomicDir::create(&cfg.out, "strips")?;
 
     let t0 = Instant::now();
     let bar = progress_bar(args.quiet, cfg.secondary.max_iterations, "hub mesh");
@@ -109,7 +122,16 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     let solved = solved.map_err(|e| anyhow!("{}: primary solve: {e}", cfg.target))?;
     let primary_s = t1.elapsed().as_secs_f64();
 
-    let frame = solved.to_frame_file(&mesh);
+    let t2 = Instant::now();
+    let mut frame = solved.to_frame_file(&mesh);
+    let stage = strips::run(&mut frame, &strip_options, &cfg.profile)
+        .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
+    let strips_json = sv_io::inline_number_arrays(&serde_json::to_string_pretty(&stage.file)?);
+    for (name, text) in &stage.drawings {
+        strips_dir.write(name, text)?;
+    }
+    let strips_s = t2.elapsed().as_secs_f64();
+
     let header = format!("spinvalence hub mesh of {}, mm, Z up", cfg.target);
     let mesh_obj = sv_io::write_quad_obj(&mesh, &header);
     let frame_obj = sv_io::frame_to_obj(&frame);
@@ -118,24 +140,41 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     let timings = Timings {
         secondary: secondary_s,
         primary: primary_s,
+        strips: strips_s,
         total: started.elapsed().as_secs_f64(),
     };
     let timings_json = serde_json::to_string_pretty(&timings)?;
-    let written = files.commit(&[
+    let strips_path = strips_dir.commit()?;
+    let mut written = files.commit(&[
         &mesh_obj,
         &frame_obj,
+        &strips_json,
         &timings_json,
         &report_json,
         &frame_json,
     ])?;
+    written.insert(0, strips_path.join(""));
 
     if !args.quiet {
         let overlaps = &solved.evaluation.overlaps;
         let min = overlaps.iter().copied().fold(f64::INFINITY, f64::min);
         let max = overlaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let unit = report.mean_edge;
-        let rows = summary_rows(&cfg, &report, unit, &solved.report, (min, max), &timings);
-        let mut rows = rows;
+        let mut rows = summary_rows(&cfg, &report, unit, &solved.report, (min, max), &timings);
+        let sheet_rows = rows.len() - 2;
+        rows.insert(
+            sheet_rows,
+            vec![
+                "strips".into(),
+                format!(
+                    "{} (longest {}, worst pin bend {:.1} deg, twist {:.1} deg)",
+                    stage.strips.len(),
+                    number(stage.strips.iter().map(|s| s.size[0]).fold(0.0, f64::max)) + " mm",
+                    stage.worst_pin.0.to_degrees(),
+                    stage.worst_pin.1.to_degrees()
+                ),
+            ],
+        );
         rows.push(vec![
             "wrote".into(),
             written
@@ -208,8 +247,11 @@ fn summary_rows(
             format!("{} .. {}", mm(overlap.0), mm(overlap.1)),
         ],
         [
-            "time secondary / primary".into(),
-            format!("{:.3} s / {:.3} s", t.secondary, t.primary),
+            "time secondary / primary / strips".into(),
+            format!(
+                "{:.3} s / {:.3} s / {:.3} s",
+                t.secondary, t.primary, t.strips
+            ),
         ],
         [
             "time total".into(),

@@ -71,8 +71,9 @@ Examples:
   spinvalence build --config build.toml --unit-size 200
 
 Built-in targets: builtin:flat, builtin:vault, builtin:dome, builtin:saddle, builtin:pavilion.
-Writes DIR/mesh.obj (hub mesh), frame.json, frame.obj, report.json and timings.json, all or
-nothing. `spinvalence build --print-config` prints a config file with every default.";
+Writes DIR/mesh.obj (hub mesh), frame.json, frame.obj, strips.json, strips/ (one DXF and one
+SVG per strip), report.json and timings.json, all or nothing. `spinvalence build --print-config`
+prints a config file with every default.";
 
 const NEST_EXAMPLES: &str = "\
 Examples:
@@ -161,6 +162,9 @@ pub struct BuildArgs {
     /// Output directory (default ./out).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Mesh direction of the strips: u (along side 0 of unit 0) or v (default u).
+    #[arg(long, value_name = "u|v", value_parser = parse_direction)]
+    pub strip_direction: Option<sv_strips::StripDirection>,
     /// Print a config file with every default and exit.
     #[arg(long)]
     pub print_config: bool,
@@ -258,5 +262,14 @@ mod tests {
         };
         assert!((args.spin_angle.to_radians() - sv_frame::DEFAULT_SPIN_ANGLE).abs() < 1e-15);
         assert_eq!(SidePolicy::from(args.side), SolveOptions::default().side);
+    }
+}
+
+/// `u` or `v`, as in the config file.
+fn parse_direction(text: &str) -> Result<sv_strips::StripDirection, String> {
+    match text {
+        "u" | "U" => Ok(sv_strips::StripDirection::U),
+        "v" | "V" => Ok(sv_strips::StripDirection::V),
+        _ => Err(format!("`{text}` is not a strip direction (u or v)")),
     }
 }

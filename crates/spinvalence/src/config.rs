@@ -12,6 +12,13 @@
 //! spin_angle_deg = 45.0
 //! expansion = 1.0
 //! side = "auto"
+//!
+//! [strips]                      # strips and unrolling (sv_strips::StripOptions)
+//! direction = "u"
+//!
+//! [profile]                     # cut profile (sv_strips::ProfileParams), mm
+//! thickness = 3.0
+//! kerf = 1.3
 //! ```
 //!
 //! Unknown keys are errors (a typo must not silently fall back to a default). Command-line
@@ -22,6 +29,7 @@ use std::path::PathBuf;
 use anyhow::{anyhow, bail, Result};
 use serde::{Deserialize, Serialize};
 use sv_frame::{SidePolicy, SolveOptions};
+use sv_strips::{ProfileParams, StripOptions};
 use sv_surface::SecondaryOptions;
 
 /// Default output directory of `build`.
@@ -39,6 +47,43 @@ pub struct BuildConfig {
     pub secondary: SecondaryOptions,
     /// Primary-surface solve options.
     pub primary: PrimaryConfig,
+    /// Strip partition and unrolling.
+    pub strips: StripsConfig,
+    /// Cut profile of every part (mm).
+    pub profile: ProfileParams,
+}
+
+/// `[strips]`: how the units are partitioned into strips.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StripsConfig {
+    /// `u` (along side 0 of unit 0) or `v` (across it).
+    pub direction: sv_strips::StripDirection,
+    /// Longest flat pattern (mm): the sheet length minus both margins.
+    pub max_length: f64,
+}
+
+impl Default for StripsConfig {
+    fn default() -> Self {
+        let d = StripOptions::default();
+        Self {
+            direction: d.direction,
+            max_length: d.max_length,
+        }
+    }
+}
+
+impl StripsConfig {
+    /// The unrolling options, checked (one line naming the key).
+    pub fn to_options(&self) -> Result<StripOptions> {
+        let options = StripOptions {
+            direction: self.direction,
+            max_length: self.max_length,
+            ..StripOptions::default()
+        };
+        options.validate().map_err(|e| anyhow!("strips: {e}"))?;
+        Ok(options)
+    }
 }
 
 impl Default for BuildConfig {
@@ -48,6 +93,8 @@ impl Default for BuildConfig {
             out: PathBuf::from(DEFAULT_OUT),
             secondary: SecondaryOptions::default(),
             primary: PrimaryConfig::default(),
+            strips: StripsConfig::default(),
+            profile: ProfileParams::default(),
         }
     }
 }
@@ -119,14 +166,41 @@ impl PrimaryConfig {
 
 /// Parse a config file's text; errors are one line naming `name:line:column`.
 pub fn parse(text: &str, name: &str) -> Result<BuildConfig> {
-    toml::from_str(text).map_err(|e| {
+    let config: BuildConfig = toml::from_str(text).map_err(|e| {
         let (line, column) = e
             .span()
             .map(|span| line_column(text, span.start))
             .unwrap_or((1, 1));
         let message = e.message().replace(['\n', '\r'], " ");
         anyhow!("{name}:{line}:{column}: {}", message.trim_end_matches('.'))
-    })
+    })?;
+    check_profile_keys(text, name)?;
+    Ok(config)
+}
+
+/// `[profile]` is `sv_strips::ProfileParams`, which `strips.json` flattens and so cannot
+/// deny unknown fields itself: compare its keys with the known ones here.
+fn check_profile_keys(text: &str, name: &str) -> Result<()> {
+    let table: toml::Table = toml::from_str(text).map_err(|e| anyhow!("{name}: {e}"))?;
+    let Some(toml::Value::Table(profile)) = table.get("profile") else {
+        return Ok(());
+    };
+    let known = toml::Table::try_from(ProfileParams::default())
+        .map_err(|e| anyhow!("profile defaults: {e}"))?;
+    if let Some(key) = profile.keys().find(|k| !known.contains_key(*k)) {
+        let at = text
+            .find(&format!("\n{key}"))
+            .map(|i| line_column(text, i + 1))
+            .unwrap_or((1, 1));
+        let expected: Vec<&str> = known.keys().map(String::as_str).collect();
+        bail!(
+            "{name}:{}:{}: unknown field `{key}` in [profile], expected one of {}",
+            at.0,
+            at.1,
+            expected.join(", ")
+        );
+    }
+    Ok(())
 }
 
 /// 1-based line and column of a byte offset.
@@ -189,6 +263,24 @@ mod tests {
         let e = parse("target = \n", "c.toml").unwrap_err().to_string();
         assert!(e.starts_with("c.toml:1:"), "{e}");
         assert!(!e.contains('\n'));
+        let e = parse("[profile]\nthickness = 2.0\nneck_widht = 9.0\n", "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("c.toml:3:1:"), "{e}");
+        assert!(e.contains("neck_widht") && e.contains("neck_width"), "{e}");
+        let c = parse(
+            "[profile]\nthickness = 2.0\n[strips]\ndirection = \"v\"\n",
+            "c.toml",
+        )
+        .unwrap();
+        assert_eq!(c.profile.thickness, 2.0);
+        assert_eq!(c.profile.kerf, ProfileParams::default().kerf);
+        assert_eq!(c.strips.direction, sv_strips::StripDirection::V);
+        assert!(parse("[strips]\nmax_length = -1.0\n", "c.toml")
+            .unwrap()
+            .strips
+            .to_options()
+            .is_err());
         for (key, value) in [
             ("spin_angle_deg", "90.0"),
             ("spin_angle_deg", "0.0"),

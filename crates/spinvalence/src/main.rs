@@ -11,6 +11,7 @@ mod config;
 mod nest;
 mod output;
 mod solve;
+mod strips;
 
 use std::process::ExitCode;
 

@@ -123,6 +123,94 @@ impl AtomicFiles {
     }
 }
 
+/// A directory of files (`DIR/strips/`, `DIR/sheets/`) filled under a hidden temporary
+/// name beside its final place and swapped in by [`AtomicDir::commit`]: readers see the old
+/// directory or the new one, never a half-written mix. Dropped uncommitted, it vanishes.
+pub struct AtomicDir {
+    temp: tempfile::TempDir,
+    target: PathBuf,
+}
+
+impl AtomicDir {
+    /// Create the temporary directory for `parent/name` (`parent` is created if needed).
+    pub fn create(parent: &Path, name: &str) -> Result<Self> {
+        fs::create_dir_all(parent).map_err(|e| {
+            anyhow!(
+                "cannot create output directory {}: {}",
+                parent.display(),
+                io_message(&e)
+            )
+        })?;
+        let temp = tempfile::Builder::new()
+            .prefix(&format!(".{name}."))
+            .suffix(".tmp")
+            .tempdir_in(parent)
+            .map_err(|e| {
+                anyhow!(
+                    "output directory {} is not writable: {}",
+                    parent.display(),
+                    io_message(&e)
+                )
+            })?;
+        Ok(Self {
+            temp,
+            target: parent.join(name),
+        })
+    }
+
+    /// Write one file into the directory.
+    pub fn write(&self, file: &str, text: &str) -> Result<()> {
+        let path = self.temp.path().join(file);
+        fs::write(&path, text)
+            .map_err(|e| anyhow!("{}: {}", self.target.join(file).display(), io_message(&e)))
+    }
+
+    /// Replace `parent/name` (and everything that was in it) by the new directory.
+    pub fn commit(self) -> Result<PathBuf> {
+        let Self { temp, target } = self;
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            // like any new directory, not the private 0700 of a temporary one
+            let _ = fs::set_permissions(temp.path(), fs::Permissions::from_mode(0o755));
+        }
+        let old = match fs::symlink_metadata(&target) {
+            Ok(meta) if meta.is_dir() => {
+                let parent = target.parent().unwrap_or(Path::new("."));
+                let old = tempfile::Builder::new()
+                    .prefix(".old.")
+                    .tempdir_in(parent)
+                    .map_err(|e| anyhow!("{}: {}", parent.display(), io_message(&e)))?
+                    .keep();
+                let moved = old.join("d");
+                fs::rename(&target, &moved)
+                    .map_err(|e| anyhow!("{}: {}", target.display(), io_message(&e)))?;
+                Some(old)
+            }
+            Ok(_) => {
+                return Err(anyhow!(
+                    "{}: exists and is not a directory",
+                    target.display()
+                ))
+            }
+            Err(_) => None,
+        };
+        let path = temp.keep();
+        if let Err(e) = fs::rename(&path, &target) {
+            let _ = fs::remove_dir_all(&path);
+            if let Some(old) = &old {
+                let _ = fs::rename(old.join("d"), &target);
+                let _ = fs::remove_dir_all(old);
+            }
+            return Err(anyhow!("{}: {}", target.display(), io_message(&e)));
+        }
+        if let Some(old) = old {
+            let _ = fs::remove_dir_all(old);
+        }
+        Ok(target)
+    }
+}
+
 /// Print to stdout; a closed pipe (`| head`) is not an error.
 pub fn print_out(text: &str) -> Result<()> {
     let mut out = io::stdout().lock();
@@ -235,6 +323,34 @@ mod tests {
                 & 0o777
         };
         assert_eq!(mode("a.txt"), mode("plain.txt"));
+    }
+
+    #[test]
+    fn atomic_dir_replaces_the_old_directory_whole() {
+        let dir = tempfile::tempdir().unwrap();
+        let first = AtomicDir::create(dir.path(), "strips").unwrap();
+        first.write("A01.dxf", "one").unwrap();
+        first.write("A02.dxf", "two").unwrap();
+        let target = first.commit().unwrap();
+        assert_eq!(fs::read_to_string(target.join("A02.dxf")).unwrap(), "two");
+        let second = AtomicDir::create(dir.path(), "strips").unwrap();
+        second.write("A01.dxf", "new").unwrap();
+        assert_eq!(
+            fs::read_to_string(target.join("A01.dxf")).unwrap(),
+            "one",
+            "the old directory stays until commit"
+        );
+        second.commit().unwrap();
+        let names: Vec<_> = fs::read_dir(&target)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert_eq!(names, ["A01.dxf"], "stale files of the old run are gone");
+        assert_eq!(fs::read_to_string(target.join("A01.dxf")).unwrap(), "new");
+        let left: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(left.len(), 1, "no temporary directories left behind");
+        drop(AtomicDir::create(dir.path(), "sheets").unwrap());
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
     #[test]

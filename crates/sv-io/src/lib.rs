@@ -39,7 +39,9 @@ mod text;
 mod tri_mesh;
 
 pub use error::IoError;
-pub use frame_json::{frame_from_json, frame_to_json, FRAME_LENGTH_UNIT, FRAME_VERSION};
+pub use frame_json::{
+    frame_from_json, frame_to_json, inline_number_arrays, FRAME_LENGTH_UNIT, FRAME_VERSION,
+};
 pub use frame_obj::frame_to_obj;
 pub use quad_obj::{
     read_and_validate_quad_obj, read_quad_obj, read_quad_obj_bytes, write_quad_obj,

@@ -1,0 +1,95 @@
+//! The strip stage of `build`: unroll the deployed frame into strips, label every unit,
+//! profile the cut contours, check the design rules, and render DXF + SVG per strip.
+//! Pure computation; `build` writes the results atomically.
+
+use anyhow::{anyhow, bail, Result};
+use sv_frame::FrameFile;
+use sv_strips::{FlatStrip, ProfileParams, StripOptions, StripProfile, StripsFile, Violation};
+
+/// Everything the strip stage produces, ready to write.
+pub struct StripsStage {
+    /// `strips.json`.
+    pub file: StripsFile,
+    /// Unrolled strips, in file order.
+    pub strips: Vec<FlatStrip>,
+    /// `(file name, text)` of every strip's DXF and SVG, for `DIR/strips/`.
+    pub drawings: Vec<(String, String)>,
+    /// Largest bend and twist any pin takes up (rad).
+    pub worst_pin: (f64, f64),
+}
+
+/// At most this many design-rule violations are listed in the error.
+const SHOWN_VIOLATIONS: usize = 3;
+
+/// Unroll, label and profile `frame`; writes the labels into `frame.units[].id`/`strip`.
+/// A design-rule violation on any part is an error that names the strip, unit and rule:
+/// a part that would crack or not cut is never written.
+pub fn run(
+    frame: &mut FrameFile,
+    options: &StripOptions,
+    params: &ProfileParams,
+) -> Result<StripsStage> {
+    params.validate().map_err(|e| anyhow!("profile: {e}"))?;
+    let strips = sv_strips::unroll(frame, options).map_err(|e| anyhow!("strips: {e}"))?;
+    sv_strips::apply_labels(frame, &strips);
+    let mut profiles: Vec<StripProfile> = Vec::with_capacity(strips.len());
+    let mut violations: Vec<Violation> = Vec::new();
+    for strip in &strips {
+        let names: Vec<String> = strip
+            .units
+            .iter()
+            .map(|&u| frame.units.get(u).map(|r| r.id.clone()).unwrap_or_default())
+            .collect();
+        let profile =
+            sv_strips::profile_strip(strip, &names, params).map_err(|e| anyhow!("profile: {e}"))?;
+        violations.extend(sv_strips::check_profile(strip, &profile, params));
+        profiles.push(profile);
+    }
+    if !violations.is_empty() {
+        let shown: Vec<String> = violations
+            .iter()
+            .take(SHOWN_VIOLATIONS)
+            .map(|v| v.to_string())
+            .collect();
+        bail!(
+            "design-rule check: {} violation(s): {}{}",
+            violations.len(),
+            shown.join("; "),
+            if violations.len() > SHOWN_VIOLATIONS {
+                "; ..."
+            } else {
+                ""
+            }
+        );
+    }
+    let mut drawings = Vec::with_capacity(2 * strips.len());
+    for (strip, profile) in strips.iter().zip(&profiles) {
+        drawings.push((
+            format!("{}.dxf", strip.id),
+            sv_export::strip_dxf(strip, profile),
+        ));
+        drawings.push((
+            format!("{}.svg", strip.id),
+            sv_export::strip_svg(strip, profile, params),
+        ));
+    }
+    let worst_pin = strips
+        .iter()
+        .flat_map(|s| &s.pins)
+        .fold((0.0f64, 0.0f64), |(b, t), p| {
+            (b.max(p.bend.abs()), t.max(p.twist.abs()))
+        });
+    let file = StripsFile::new(
+        &strips,
+        &profiles,
+        params,
+        frame.params.expansion,
+        options.max_length,
+    );
+    Ok(StripsStage {
+        file,
+        strips,
+        drawings,
+        worst_pin,
+    })
+}

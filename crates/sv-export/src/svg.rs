@@ -1,0 +1,197 @@
+//! SVG drawing of one strip for the fabricator: part with its cuts, etched labels and fold
+//! marks, nominal tiles and pins, a scale bar, and a title with the strip id and size.
+//! Drawn 1:1 in mm (`width`/`height` in mm), y up as in the DXF.
+
+use std::fmt::Write;
+
+use sv_strips::{Contour, FlatStrip, ProfileParams, StripProfile};
+
+use crate::font::text_strokes;
+
+fn path_of(c: &Contour, d: &mut String) {
+    let n = c.0.len();
+    if n == 0 {
+        return;
+    }
+    let _ = write!(d, "M{:.3},{:.3}", c.0[0][0], c.0[0][1]);
+    for i in 0..n {
+        let [x0, y0, b] = c.0[i];
+        let [x1, y1, _] = c.0[(i + 1) % n];
+        if b.abs() < 1e-12 {
+            let _ = write!(d, "L{x1:.3},{y1:.3}");
+        } else {
+            let sweep = 4.0 * b.atan();
+            let chord = ((x1 - x0).powi(2) + (y1 - y0).powi(2)).sqrt();
+            let r = chord / (2.0 * (sweep / 2.0).sin().abs());
+            let large = u8::from(sweep.abs() > std::f64::consts::PI);
+            let pos = u8::from(b > 0.0);
+            let _ = write!(d, "A{r:.3},{r:.3} 0 {large} {pos} {x1:.3},{y1:.3}");
+        }
+    }
+    d.push('Z');
+}
+
+fn polyline(points: &[[f64; 2]]) -> String {
+    points
+        .iter()
+        .map(|p| format!("{:.3},{:.3}", p[0], p[1]))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A "nice" scale bar length (mm) about a fifth of `span`: 1, 2 or 5 times a power of ten.
+fn bar_length(span: f64) -> f64 {
+    let target = (span / 5.0).max(10.0);
+    let p = 10f64.powf(target.log10().floor());
+    [5.0, 2.0, 1.0]
+        .iter()
+        .map(|m| m * p)
+        .find(|&l| l <= target)
+        .unwrap_or(p)
+}
+
+/// The SVG text of one profiled strip.
+pub fn strip_svg(strip: &FlatStrip, profile: &StripProfile, params: &ProfileParams) -> String {
+    let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+    for t in &profile.tiles {
+        for p in t {
+            x0 = x0.min(p[0]);
+            y0 = y0.min(p[1]);
+            x1 = x1.max(p[0]);
+            y1 = y1.max(p[1]);
+        }
+    }
+    if x0 > x1 {
+        (x0, y0, x1, y1) = (0.0, 0.0, 1.0, 1.0);
+    }
+    let margin = 30.0;
+    let title_h = 70.0;
+    let bar_h = 60.0;
+    let (w, h) = (
+        x1 - x0 + 2.0 * margin,
+        y1 - y0 + 2.0 * margin + title_h + bar_h,
+    );
+    // model (y up) to drawing: x' = x - x0 + margin, y' = (y1 + margin + title_h) - y
+    let mut s = String::with_capacity(64 * 1024);
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w:.1}mm" height="{h:.1}mm" viewBox="0 0 {w:.3} {h:.3}">"#
+    );
+    let _ = writeln!(
+        s,
+        r#"<rect x="0" y="0" width="{w:.3}" height="{h:.3}" fill="white"/>"#
+    );
+    let units = strip.units.len();
+    let _ = writeln!(
+        s,
+        r#"<text x="{margin}" y="28" font-family="sans-serif" font-size="20" font-weight="bold">Strip {} — {:.0} × {:.0} mm — {units} units</text>"#,
+        strip.id, strip.size[0], strip.size[1]
+    );
+    let _ = writeln!(
+        s,
+        r##"<text x="{margin}" y="52" font-family="sans-serif" font-size="12">t = {} mm · kerf {} mm (nominal contours, CAM compensates) · net area {:.3} m² · <tspan fill="black">cut</tspan> · <tspan fill="#2a7">etch</tspan> · <tspan fill="#d22">fold</tspan> · <tspan fill="#999">tile / pin (info)</tspan></text>"##,
+        params.thickness,
+        params.kerf,
+        profile.area / 1e6
+    );
+    let _ = writeln!(
+        s,
+        r#"<g transform="translate({:.3},{:.3}) scale(1,-1)">"#,
+        margin - x0,
+        y1 + margin + title_h
+    );
+    // info: nominal tiles and pins
+    for t in &profile.tiles {
+        let _ = writeln!(
+            s,
+            r##"<polygon points="{}" fill="none" stroke="#999" stroke-width="0.6" stroke-dasharray="6 4"/>"##,
+            polyline(t)
+        );
+    }
+    // the part: outline and cuts in one even-odd path
+    let mut d = String::new();
+    path_of(&profile.outline, &mut d);
+    for c in &profile.cuts {
+        path_of(c, &mut d);
+    }
+    let _ = writeln!(
+        s,
+        r##"<path d="{d}" fill="#dfe5ec" fill-rule="evenodd" stroke="black" stroke-width="0.8"/>"##
+    );
+    for pin in &strip.pins {
+        let (x, y) = (pin.point.x, pin.point.y);
+        let _ = writeln!(
+            s,
+            r##"<path d="M{:.3},{y:.3}H{:.3}M{x:.3},{:.3}V{:.3}" stroke="#999" stroke-width="0.6"/>"##,
+            x - 4.0,
+            x + 4.0,
+            y - 4.0,
+            y + 4.0
+        );
+    }
+    for f in &profile.fold_marks {
+        let _ = writeln!(
+            s,
+            r##"<polyline points="{}" fill="none" stroke="#d22" stroke-width="1.2"/>"##,
+            polyline(f)
+        );
+    }
+    for l in &profile.labels {
+        // the strokes are what gets etched; the title names them on hover and for search
+        let _ = writeln!(
+            s,
+            r#"<g class="label" data-label="{0}"><title>{0}</title>"#,
+            escape(&l.text)
+        );
+        for st in text_strokes(&l.text, l.at, l.angle, l.height) {
+            let _ = writeln!(
+                s,
+                r##"<polyline points="{}" fill="none" stroke="#2a7" stroke-width="1.2" stroke-linecap="round" stroke-linejoin="round"/>"##,
+                polyline(&st)
+            );
+        }
+        s.push_str("</g>\n");
+    }
+    s.push_str("</g>\n");
+    // scale bar
+    let len = bar_length(x1 - x0);
+    let (bx, by) = (margin, h - 30.0);
+    let _ = writeln!(
+        s,
+        r#"<g stroke="black" stroke-width="1"><rect x="{bx:.3}" y="{:.3}" width="{:.3}" height="6" fill="black"/><rect x="{:.3}" y="{:.3}" width="{:.3}" height="6" fill="white"/></g>"#,
+        by - 6.0,
+        len / 2.0,
+        bx + len / 2.0,
+        by - 6.0,
+        len / 2.0
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{bx:.3}" y="{:.3}" font-family="sans-serif" font-size="12">0</text><text x="{:.3}" y="{:.3}" font-family="sans-serif" font-size="12" text-anchor="end">{len:.0} mm</text>"#,
+        by + 14.0,
+        bx + len,
+        by + 14.0
+    );
+    s.push_str("</svg>\n");
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scale_bars_are_round_numbers() {
+        assert_eq!(bar_length(1800.0), 200.0);
+        assert_eq!(bar_length(3000.0), 500.0);
+        assert_eq!(bar_length(20.0), 10.0);
+    }
+}
+
+/// Text for an SVG attribute or element.
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}

@@ -1,0 +1,362 @@
+//! Strip and cut-profile parameters with documented defaults for 3 mm mild steel cut on an
+//! air plasma (kerf about 1.3 mm). All lengths in mm.
+
+use serde::{Deserialize, Serialize};
+
+use crate::StripsError;
+
+/// Default sheet length (mm): the common 3000 x 1500 mm plate.
+pub const DEFAULT_SHEET_LENGTH: f64 = 3000.0;
+/// Default margin between the sheet edge and a part (mm), also the room for the outline's lead-in.
+pub const DEFAULT_SHEET_MARGIN: f64 = 10.0;
+
+/// Which mesh direction the strips follow.
+///
+/// Directions are propagated over the mesh from unit 0: a strip crosses opposite sides `k`
+/// and `k + 2` of each unit. `U` strips cross sides 1 and 3 of unit 0, i.e. they run along
+/// side 0 of unit 0 (increasing `i` on a [`sv_frame::QuadMesh::from_fn`] grid); `V` strips
+/// cross the other pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StripDirection {
+    /// Along side 0 of unit 0.
+    #[default]
+    U,
+    /// Across side 0 of unit 0.
+    V,
+}
+
+/// Options of the strip partition and unrolling.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StripOptions {
+    /// Mesh direction of the strips.
+    pub direction: StripDirection,
+    /// Longest flat pattern (mm): the sheet length minus both margins. A strip whose flat
+    /// pattern (longer side of its minimum-area bounding rectangle) would exceed it is split.
+    pub max_length: f64,
+    /// Two flat tiles count as overlapping when their intersection exceeds this area
+    /// (mm^2). Consecutive tiles touch along their joint line (area 0); 1e-3 mm^2 is far below
+    /// anything a cutter resolves and far above rounding noise.
+    pub overlap_area_tolerance: f64,
+}
+
+impl Default for StripOptions {
+    fn default() -> Self {
+        Self {
+            direction: StripDirection::U,
+            max_length: DEFAULT_SHEET_LENGTH - 2.0 * DEFAULT_SHEET_MARGIN,
+            overlap_area_tolerance: 1e-3,
+        }
+    }
+}
+
+impl StripOptions {
+    /// Check the options; the error names the bad option.
+    pub fn validate(&self) -> Result<(), StripsError> {
+        if !(self.max_length.is_finite() && self.max_length > 0.0) {
+            return Err(StripsError::Parameter {
+                name: "max_length",
+                value: self.max_length,
+                why: "must be a finite length > 0".into(),
+            });
+        }
+        if !(self.overlap_area_tolerance.is_finite() && self.overlap_area_tolerance >= 0.0) {
+            return Err(StripsError::Parameter {
+                name: "overlap_area_tolerance",
+                value: self.overlap_area_tolerance,
+                why: "must be a finite area >= 0".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The cut profile of a unit (see `docs/fabrication.md` for the drawn layout).
+///
+/// From the part outline inward every unit has: the rim (primary-tile material that carries
+/// the bridges to the neighbours), an outer slot, the leg, an inner slot and the hub. Each
+/// of the four hook ("roughly L-shaped") slots separates the hub from leg `i`, the end of
+/// leg `i` from leg `i + 1`, and leg `i + 1` from the rim, leaving a neck of width
+/// `neck_width` where leg `i + 1` joins the hub and where it joins the rim. Consecutive
+/// units of a strip are separated by a joint slot `neck_length` wide, crossed by one
+/// bridge (`neck_width` x `neck_length`) at their pin.
+///
+/// Defaults (3 mm mild steel, air plasma): t = 3, kerf 1.3, leg 20, rim 12, neck 10 x 4.5,
+/// slot 4.5 (1.5 t, ends full rounds of diameter 4.5 >= max(kerf + 0.5, t)), fillet 2,
+/// lead-in room 2.6 (2 kerf).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ProfileParams {
+    /// Material thickness t (mm).
+    pub thickness: f64,
+    /// Kerf width of the cutter (mm). The contours are nominal: the CAM compensates it.
+    pub kerf: f64,
+    /// Width of a leg between its two slots (mm).
+    pub leg_width: f64,
+    /// Width of the rim between the outer slot and the part outline (mm).
+    pub rim_width: f64,
+    /// Width of a neck, the reduced cross-section where the part folds (mm):
+    /// at most half the leg width, at least 3 t.
+    pub neck_width: f64,
+    /// Length of a neck along the fold (mm), 1-2 t: the joint slot between the units of a
+    /// strip and so the length of a bridge. Leg necks are as long as the slot is wide.
+    pub neck_length: f64,
+    /// Width of every slot (mm); each end is a full round of this diameter.
+    pub slot_width: f64,
+    /// Radius of the fillets on the outline's corners (mm), >= 1.
+    pub fillet_radius: f64,
+    /// Diameter of the circle that must fit inside every cut for its pierce and lead-in (mm).
+    pub lead_in_room: f64,
+}
+
+impl Default for ProfileParams {
+    fn default() -> Self {
+        Self {
+            thickness: 3.0,
+            kerf: 1.3,
+            leg_width: 20.0,
+            rim_width: 12.0,
+            neck_width: 10.0,
+            neck_length: 4.5,
+            slot_width: 4.5,
+            fillet_radius: 2.0,
+            lead_in_room: 2.6,
+        }
+    }
+}
+
+/// Smallest inside radius a plasma-cut part may have (mm).
+pub const MIN_INSIDE_RADIUS: f64 = 1.0;
+
+impl ProfileParams {
+    /// The minimum web between cuts and the minimum slot width: max(1.5 t, 3 mm).
+    pub fn min_web(&self) -> f64 {
+        (1.5 * self.thickness).max(3.0)
+    }
+
+    /// Smallest diameter of a slot's round end: max(kerf + 0.5 mm, t).
+    pub fn min_slot_end_diameter(&self) -> f64 {
+        (self.kerf + 0.5).max(self.thickness)
+    }
+
+    /// How far the hub lies inside the expanded primary tile (mm): half the joint slot,
+    /// rim, two slots and the leg.
+    pub fn hub_inset(&self) -> f64 {
+        self.neck_length / 2.0 + self.rim_width + 2.0 * self.slot_width + self.leg_width
+    }
+
+    /// The expansion factor e (paper fig. 11) for a model primary tile of inradius
+    /// `tile_inradius` (mm): the physical primary tile is the model tile grown by the hub
+    /// inset, so the hub cut in the sheet has the model size. A rhombus is tangential, so
+    /// growing it by `d` on every side is scaling it by `1 + d / inradius` about its centre.
+    pub fn expansion_for(&self, tile_inradius: f64) -> f64 {
+        1.0 + self.hub_inset() / tile_inradius
+    }
+
+    /// Check every parameter; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), StripsError> {
+        let bad = |name: &'static str, value: f64, why: String| {
+            Err(StripsError::Parameter { name, value, why })
+        };
+        let fields = [
+            ("thickness", self.thickness),
+            ("kerf", self.kerf),
+            ("leg_width", self.leg_width),
+            ("rim_width", self.rim_width),
+            ("neck_width", self.neck_width),
+            ("neck_length", self.neck_length),
+            ("slot_width", self.slot_width),
+            ("fillet_radius", self.fillet_radius),
+            ("lead_in_room", self.lead_in_room),
+        ];
+        for (name, v) in fields {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, v, "must be a finite length > 0".into());
+            }
+        }
+        let t = self.thickness;
+        let web = self.min_web();
+        if self.slot_width <= self.kerf {
+            return bad(
+                "slot_width",
+                self.slot_width,
+                format!("narrower than the kerf {}", self.kerf),
+            );
+        }
+        if self.slot_width < web {
+            return bad(
+                "slot_width",
+                self.slot_width,
+                format!("below the minimum slot width max(1.5 t, 3 mm) = {web}"),
+            );
+        }
+        if self.slot_width < self.min_slot_end_diameter() {
+            return bad(
+                "slot_width",
+                self.slot_width,
+                format!(
+                    "slot ends would be rounds below max(kerf + 0.5, t) = {}",
+                    self.min_slot_end_diameter()
+                ),
+            );
+        }
+        if self.neck_width >= self.leg_width {
+            return bad(
+                "neck_width",
+                self.neck_width,
+                format!("not narrower than the leg ({})", self.leg_width),
+            );
+        }
+        if self.neck_width > 0.5 * self.leg_width + 1e-9 {
+            return bad(
+                "neck_width",
+                self.neck_width,
+                format!(
+                    "above half the leg width ({}): the fold would not stay at the neck",
+                    0.5 * self.leg_width
+                ),
+            );
+        }
+        if self.neck_width < 3.0 * t - 1e-9 {
+            return bad(
+                "neck_width",
+                self.neck_width,
+                format!("below 3 t = {}", 3.0 * t),
+            );
+        }
+        if self.neck_length < t - 1e-9 || self.neck_length > 2.0 * t + 1e-9 {
+            return bad(
+                "neck_length",
+                self.neck_length,
+                format!("outside 1-2 t = [{t}, {}]", 2.0 * t),
+            );
+        }
+        if self.neck_length < web {
+            return bad(
+                "neck_length",
+                self.neck_length,
+                format!("the joint slot it makes is below the minimum slot width {web}"),
+            );
+        }
+        if self.leg_width < web || self.rim_width < web {
+            let (name, v) = if self.leg_width < web {
+                ("leg_width", self.leg_width)
+            } else {
+                ("rim_width", self.rim_width)
+            };
+            return bad(name, v, format!("below the minimum web {web}"));
+        }
+        if self.fillet_radius < MIN_INSIDE_RADIUS {
+            return bad(
+                "fillet_radius",
+                self.fillet_radius,
+                format!("below the minimum inside radius {MIN_INSIDE_RADIUS}"),
+            );
+        }
+        if self.fillet_radius >= self.leg_width / 2.0 {
+            return bad(
+                "fillet_radius",
+                self.fillet_radius,
+                format!(
+                    "not smaller than half the leg width ({})",
+                    self.leg_width / 2.0
+                ),
+            );
+        }
+        if 2.0 * self.fillet_radius >= self.neck_length {
+            return bad(
+                "fillet_radius",
+                self.fillet_radius,
+                format!(
+                    "a fillet this large would close the joint slot (neck_length {})",
+                    self.neck_length
+                ),
+            );
+        }
+        if self.lead_in_room >= self.slot_width {
+            return bad(
+                "lead_in_room",
+                self.lead_in_room,
+                format!("does not fit in a slot of width {}", self.slot_width),
+            );
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn name_of(p: ProfileParams) -> &'static str {
+        match p.validate() {
+            Err(StripsError::Parameter { name, .. }) => name,
+            other => panic!("expected a parameter error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn defaults_are_valid_and_match_the_rules() {
+        let p = ProfileParams::default();
+        p.validate().unwrap();
+        assert_eq!(p.min_web(), 4.5);
+        assert!(p.slot_width >= p.min_slot_end_diameter());
+        assert!(p.neck_width <= p.leg_width / 2.0 && p.neck_width >= 3.0 * p.thickness);
+        assert!(StripOptions::default().max_length == 2980.0);
+    }
+
+    #[test]
+    fn bad_parameters_are_named() {
+        let d = ProfileParams::default;
+        assert_eq!(
+            name_of(ProfileParams {
+                neck_width: 25.0,
+                ..d()
+            }),
+            "neck_width"
+        );
+        assert_eq!(
+            name_of(ProfileParams {
+                slot_width: 1.0,
+                ..d()
+            }),
+            "slot_width"
+        );
+        assert_eq!(
+            name_of(ProfileParams {
+                fillet_radius: 30.0,
+                ..d()
+            }),
+            "fillet_radius"
+        );
+        assert_eq!(
+            name_of(ProfileParams {
+                thickness: 0.0,
+                ..d()
+            }),
+            "thickness"
+        );
+        assert_eq!(
+            name_of(ProfileParams {
+                thickness: -3.0,
+                ..d()
+            }),
+            "thickness"
+        );
+        assert_eq!(
+            name_of(ProfileParams {
+                kerf: f64::NAN,
+                ..d()
+            }),
+            "kerf"
+        );
+        let e = ProfileParams {
+            neck_width: 25.0,
+            ..d()
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("parameter neck_width = 25"), "{e}");
+    }
+}

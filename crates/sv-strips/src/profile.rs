@@ -1,0 +1,380 @@
+//! Cut profiles: the rounded steel contours of a strip (outline, hook slots, bridges).
+
+use cavalier_contours::polyline::{
+    BooleanOp, PlineCreation, PlineSource, PlineSourceMut, PlineVertex, Polyline,
+};
+use serde::{Deserialize, Serialize};
+use sv_geom::{Point2, Vector2};
+
+use crate::plane::cross;
+use crate::{FlatStrip, ProfileParams, StripsError};
+
+/// A closed contour: vertices `[x, y, bulge]` (mm), the bulge `tan(sweep / 4)` of the arc
+/// from this vertex to the next (0 for a straight segment, positive counter-clockwise).
+/// Outlines run counter-clockwise and cuts clockwise, so the material is always on the left.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct Contour(pub Vec<[f64; 3]>);
+
+impl Contour {
+    pub(crate) fn from_pline(p: &Polyline<f64>) -> Self {
+        Self(p.iter_vertexes().map(|v| [v.x, v.y, v.bulge]).collect())
+    }
+
+    pub(crate) fn to_pline(&self) -> Polyline<f64> {
+        let mut p = Polyline::with_capacity(self.0.len(), true);
+        for v in &self.0 {
+            p.add(v[0], v[1], v[2]);
+        }
+        p
+    }
+
+    /// Signed area (mm^2, positive counter-clockwise), arcs included.
+    pub fn signed_area(&self) -> f64 {
+        self.to_pline().area()
+    }
+}
+
+/// A text to etch: centred at `at`, baseline along `angle` (rad), cap height `height` (mm).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Label {
+    /// The text (`0-9`, `A-Z`, `-`).
+    pub text: String,
+    /// Centre of the text box (mm).
+    pub at: [f64; 2],
+    /// Direction of the baseline (rad, counter-clockwise from +x).
+    pub angle: f64,
+    /// Cap height (mm).
+    pub height: f64,
+}
+
+/// The cut profile of one strip, in the strip's flat frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StripProfile {
+    /// The part outline (counter-clockwise).
+    pub outline: Contour,
+    /// The hook slots (clockwise), four per unit in unit order.
+    pub cuts: Vec<Contour>,
+    /// Frame unit of each cut.
+    pub cut_units: Vec<usize>,
+    /// Fold marks to etch across every neck and bridge (segments, mm).
+    pub fold_marks: Vec<[[f64; 2]; 2]>,
+    /// One label per unit (`A03-07`) on its hub, plus none for the strip.
+    pub labels: Vec<Label>,
+    /// Nominal flat expanded primary tiles (closed quads) for the never-cut info layer.
+    pub tiles: Vec<[[f64; 2]; 4]>,
+    /// Net area of the part (mm^2): outline minus cuts.
+    pub area: f64,
+}
+
+fn p2a(p: Point2) -> [f64; 2] {
+    [p.x, p.y]
+}
+
+/// Intersection of the lines `p + s d` and `q + t e`.
+fn meet(p: Point2, d: Vector2, q: Point2, e: Vector2) -> Option<Point2> {
+    let den = cross(&d, &e);
+    if den.abs() < 1e-12 {
+        return None;
+    }
+    Some(p + d * (cross(&(q - p), &e) / den))
+}
+
+/// The counter-clockwise convex quad `q` with every side moved inward by `delta`.
+fn inset(q: &[Point2; 4], delta: f64) -> Option<[Point2; 4]> {
+    let d: [Vector2; 4] = std::array::from_fn(|i| (q[(i + 1) % 4] - q[i]).normalize());
+    let base: [Point2; 4] = std::array::from_fn(|i| q[i] + Vector2::new(-d[i].y, d[i].x) * delta);
+    let mut out = [Point2::origin(); 4];
+    for i in 0..4 {
+        let h = (i + 3) % 4;
+        out[i] = meet(base[h], d[h], base[i], d[i])?;
+    }
+    // still counter-clockwise and convex with the same side directions
+    for i in 0..4 {
+        let e = out[(i + 1) % 4] - out[i];
+        if e.dot(&d[i]) <= 1e-9 {
+            return None;
+        }
+    }
+    Some(out)
+}
+
+fn closed(points: &[Point2]) -> Polyline<f64> {
+    let mut p = Polyline::with_capacity(points.len(), true);
+    for q in points {
+        p.add(q.x, q.y, 0.0);
+    }
+    p
+}
+
+fn one(mut v: Vec<Polyline<f64>>, what: &str) -> Result<Polyline<f64>, StripsError> {
+    if v.len() == 1 {
+        Ok(v.remove(0))
+    } else {
+        Err(StripsError::Internal {
+            why: format!("{what}: expected one contour, got {}", v.len()),
+        })
+    }
+}
+
+/// A slot of width `width` around an open centre line: both offsets joined by half-circle
+/// ends, clockwise (material on the left). Outer bends get arcs from the offset.
+fn slot(center: &[Point2], width: f64) -> Result<Polyline<f64>, StripsError> {
+    let mut c = Polyline::with_capacity(center.len(), false);
+    for q in center {
+        c.add(q.x, q.y, 0.0);
+    }
+    let left = one(c.parallel_offset(width / 2.0), "slot left side")?;
+    let mut right = one(c.parallel_offset(-width / 2.0), "slot right side")?;
+    right.invert_direction_mut();
+    let mut out = Polyline::with_capacity(left.vertex_count() + right.vertex_count(), true);
+    for (i, v) in left.iter_vertexes().enumerate() {
+        let b = if i + 1 == left.vertex_count() {
+            -1.0
+        } else {
+            v.bulge
+        };
+        out.add_vertex(PlineVertex::new(v.x, v.y, b));
+    }
+    for (i, v) in right.iter_vertexes().enumerate() {
+        let b = if i + 1 == right.vertex_count() {
+            -1.0
+        } else {
+            v.bulge
+        };
+        out.add_vertex(PlineVertex::new(v.x, v.y, b));
+    }
+    Ok(out)
+}
+
+/// Everything of one unit inside its plate.
+struct UnitCut {
+    slots: Vec<Polyline<f64>>,
+    folds: Vec<[[f64; 2]; 2]>,
+    label: Label,
+}
+
+fn unit_error(strip: &str, unit: usize, why: String) -> StripsError {
+    StripsError::Unit {
+        strip: strip.to_string(),
+        unit,
+        why,
+    }
+}
+
+/// The four hook slots of a unit whose plate (tile minus half the joint slot) is `q`.
+fn unit_cuts(
+    strip: &str,
+    unit: usize,
+    label: String,
+    q: &[Point2; 4],
+    p: &ProfileParams,
+) -> Result<UnitCut, StripsError> {
+    let s = p.slot_width;
+    let err = |why: &str| unit_error(strip, unit, why.to_string());
+    let oq = inset(q, p.rim_width + s / 2.0).ok_or_else(|| err("tile too small for the rim"))?;
+    let iq = inset(q, p.rim_width + 1.5 * s + p.leg_width)
+        .ok_or_else(|| err("tile too small for rim, legs and slots"))?;
+    let hub = inset(q, p.rim_width + 2.0 * s + p.leg_width)
+        .ok_or_else(|| err("tile too small: no hub left inside the legs"))?;
+    let d: [Vector2; 4] = std::array::from_fn(|i| (q[(i + 1) % 4] - q[i]).normalize());
+    let nrm = |i: usize| Vector2::new(-d[i % 4].y, d[i % 4].x);
+    let sin_at = |i: usize| cross(&d[(i + 3) % 4], &d[i % 4]).abs();
+    let neck = p.neck_width + s;
+    let mut slots = Vec::with_capacity(4);
+    let mut folds = Vec::with_capacity(8);
+    for i in 0..4 {
+        let (i1, i2) = ((i + 1) % 4, (i + 2) % 4);
+        let h = iq[i];
+        let a = h + d[i] * (neck / sin_at(i));
+        let x = meet(iq[i], d[i], oq[i1], d[i1]).ok_or_else(|| err("parallel sides"))?;
+        let c = oq[i2];
+        let x_next = meet(iq[i1], d[i1], oq[i2], d[i2]).ok_or_else(|| err("parallel sides"))?;
+        let run = (x_next - c).dot(&d[i2]) - neck / sin_at(i2);
+        if (x - a).dot(&d[i]) < s || run < s / 2.0 {
+            return Err(err(&format!(
+                "tile too small for the hook slot {i} with neck width {}",
+                p.neck_width
+            )));
+        }
+        let end = c + d[i2] * run;
+        slots.push(slot(&[a, x, c, end], s)?);
+        // hub neck: from the previous slot's edge to this slot's round end
+        let prev = (i + 3) % 4;
+        let foot = h + d[prev] * (a - h).dot(&d[prev]) + nrm(prev) * (s / 2.0);
+        let tip = a - d[i] * (s / 2.0);
+        folds.push(shorten(foot, tip, 0.75));
+        // rim neck: from this slot's end to the next slot's edge along I_{i+1}
+        let tip = end + d[i2] * (s / 2.0);
+        let foot = x_next + d[i1] * (end - x_next).dot(&d[i1]) - nrm(i1) * (s / 2.0);
+        folds.push(shorten(tip, foot, 0.75));
+    }
+    let centre = Point2::from(hub.iter().fold(Vector2::zeros(), |acc, v| acc + v.coords) / 4.0);
+    let inradius = (0..4)
+        .map(|i| cross(&d[i], &(centre - hub[i])))
+        .fold(f64::INFINITY, f64::min);
+    let height = (inradius * 2.0 / (0.9 * label.len().max(1) as f64 + 1.0)).clamp(3.0, 25.0);
+    let label = Label {
+        text: label,
+        at: p2a(centre),
+        angle: d[0].y.atan2(d[0].x),
+        height,
+    };
+    Ok(UnitCut {
+        slots,
+        folds,
+        label,
+    })
+}
+
+/// The segment `a b` shortened by `by` at both ends.
+fn shorten(a: Point2, b: Point2, by: f64) -> [[f64; 2]; 2] {
+    let l = (b - a).norm();
+    if l <= 2.0 * by {
+        return [p2a(a), p2a(b)];
+    }
+    let u = (b - a) / l;
+    [p2a(a + u * by), p2a(b - u * by)]
+}
+
+/// Plate with rounded corners: `q` opened by `r` (inset, then grown back).
+fn rounded_plate(q: &[Point2; 4], r: f64) -> Result<Polyline<f64>, StripsError> {
+    let inner = one(closed(q).parallel_offset(r), "plate inset")?;
+    one(inner.parallel_offset(-r), "plate grow")
+}
+
+/// Straight range of a plate side along the line `o + t u`: the side's projection minus
+/// the corner fillets `r / tan(angle / 2)`.
+fn straight_range(q: &[Point2; 4], k: usize, o: Point2, u: Vector2, r: f64) -> (f64, f64) {
+    let d = |i: usize| (q[(i + 1) % 4] - q[i % 4]).normalize();
+    let trim = |i: usize| {
+        // interior angle at corner i
+        let a = (-d(i + 3)).angle(&d(i));
+        r / (a / 2.0).tan()
+    };
+    let (t0, t1) = ((q[k] - o).dot(&u), (q[(k + 1) % 4] - o).dot(&u));
+    let (lo, hi) = if t0 <= t1 {
+        (t0 + trim(k), t1 - trim(k + 1))
+    } else {
+        (t1 + trim(k + 1), t0 - trim(k))
+    };
+    (lo, hi)
+}
+
+/// Cut profile of a flat strip: unit plates joined by bridges at the pins, outline
+/// fillets, four hook slots per unit, fold marks and labels. `labels[j]` is the etched
+/// label of `strip.units[j]`.
+pub fn profile_strip(
+    strip: &FlatStrip,
+    labels: &[String],
+    params: &ProfileParams,
+) -> Result<StripProfile, StripsError> {
+    params.validate()?;
+    let r = params.fillet_radius;
+    let half = params.neck_length / 2.0;
+    let mut outline: Option<Polyline<f64>> = None;
+    let mut cuts = Vec::new();
+    let mut cut_units = Vec::new();
+    let mut fold_marks = Vec::new();
+    let mut out_labels = Vec::new();
+    let mut plates = Vec::with_capacity(strip.units.len());
+    for (j, (&u, tile)) in strip.units.iter().zip(&strip.tiles).enumerate() {
+        let q = inset(tile, half)
+            .ok_or_else(|| unit_error(&strip.id, u, "tile smaller than the joint slot".into()))?;
+        let label = labels.get(j).cloned().unwrap_or_default();
+        let cut = unit_cuts(&strip.id, u, label, &q, params)?;
+        for sl in &cut.slots {
+            cuts.push(Contour::from_pline(sl));
+            cut_units.push(u);
+        }
+        fold_marks.extend(cut.folds);
+        out_labels.push(cut.label);
+        plates.push(q);
+    }
+    for (j, q) in plates.iter().enumerate() {
+        let plate = rounded_plate(q, r)?;
+        outline = Some(match outline {
+            None => plate,
+            Some(o) => union(&o, &plate, &strip.id, strip.units[j])?,
+        });
+        if let Some(pin) = strip.pins.get(j) {
+            let tile = &strip.tiles[j];
+            let k = pin.sides[0];
+            let o = tile[k];
+            let u = (tile[(k + 1) % 4] - o).normalize();
+            let v = Vector2::new(-u.y, u.x);
+            let (a0, a1) = straight_range(q, k, o, u, r);
+            let (b0, b1) = straight_range(&plates[j + 1], pin.sides[1], o, u, r);
+            let hw = params.neck_width / 2.0;
+            let (lo, hi) = (a0.max(b0) + hw + r, a1.min(b1) - hw - r);
+            if lo > hi {
+                return Err(unit_error(
+                    &strip.id,
+                    pin.units[1],
+                    format!(
+                        "facing sides overlap too little for a bridge of width {} to unit {}",
+                        params.neck_width, pin.units[0]
+                    ),
+                ));
+            }
+            let t = (pin.point - o).dot(&u).clamp(lo, hi);
+            let c = o + u * t;
+            let e = half + r + 1.0;
+            let rect = closed(&[
+                c - u * hw - v * e,
+                c + u * hw - v * e,
+                c + u * hw + v * e,
+                c - u * hw + v * e,
+            ]);
+            let ol = outline.take().ok_or_else(|| StripsError::Internal {
+                why: "no outline".into(),
+            })?;
+            outline = Some(union(&ol, &rect, &strip.id, pin.units[1])?);
+            fold_marks.push(shorten(c - u * hw, c + u * hw, 0.75));
+        }
+    }
+    let outline = outline.ok_or_else(|| StripsError::Internal {
+        why: format!("strip {} has no units", strip.id),
+    })?;
+    // fillet the inside corners (bridge to plate): closing by r
+    let grown = one(outline.parallel_offset(-r), "outline closing")?;
+    let mut outline = one(grown.parallel_offset(r), "outline closing back")?;
+    if outline.area() < 0.0 {
+        outline.invert_direction_mut();
+    }
+    let area = outline.area() - cuts.iter().map(|c| c.signed_area().abs()).sum::<f64>();
+    Ok(StripProfile {
+        outline: Contour::from_pline(&outline),
+        cuts,
+        cut_units,
+        fold_marks,
+        labels: out_labels,
+        tiles: strip.tiles.iter().map(|t| t.map(p2a)).collect(),
+        area,
+    })
+}
+
+fn union(
+    a: &Polyline<f64>,
+    b: &Polyline<f64>,
+    strip: &str,
+    unit: usize,
+) -> Result<Polyline<f64>, StripsError> {
+    let mut res = a.boolean(b, BooleanOp::Or);
+    if res.pos_plines.len() != 1 || !res.neg_plines.is_empty() {
+        return Err(unit_error(
+            strip,
+            unit,
+            format!(
+                "plate does not join the strip in one piece ({} pieces, {} holes)",
+                res.pos_plines.len(),
+                res.neg_plines.len()
+            ),
+        ));
+    }
+    let mut p = res.pos_plines.remove(0).pline;
+    if p.area() < 0.0 {
+        p.invert_direction_mut();
+    }
+    Ok(p)
+}

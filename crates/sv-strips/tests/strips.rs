@@ -1,0 +1,365 @@
+//! Strip invariants on solved frames: congruent flat tiles, collinear pinned joints, no
+//! overlaps, labels, and profiles that pass the design-rule check.
+
+use sv_frame::{solve, FrameFile, QuadMesh, SolveOptions};
+use sv_geom::{Point2, Point3};
+use sv_strips::{
+    check_profile, convex_intersection_area, profile_strip, unit_labels, unroll, ProfileParams,
+    StripDirection, StripOptions, StripsError, StripsFile, TileSet,
+};
+
+fn frame(mesh: &QuadMesh) -> FrameFile {
+    solve(mesh, &SolveOptions::default(), &mut |_| {})
+        .unwrap()
+        .to_frame_file(mesh)
+}
+
+fn cap() -> FrameFile {
+    frame(&QuadMesh::sphere_cap(6, 6, 3000.0, 300.0))
+}
+
+fn saddle() -> FrameFile {
+    frame(&QuadMesh::translational(
+        6,
+        6,
+        300.0,
+        |x| x * x / 6000.0,
+        |y| -y * y / 6000.0,
+    ))
+}
+
+fn dist3(a: &Point3, b: &Point3) -> f64 {
+    (a - b).norm()
+}
+
+fn dist2(a: &Point2, b: &Point2) -> f64 {
+    (a - b).norm()
+}
+
+fn cross(a: sv_geom::Vector2, b: sv_geom::Vector2) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+/// Every invariant of an unrolled frame.
+fn check_unrolled(f: &FrameFile, options: &StripOptions) {
+    let tiles = TileSet::from_frame(f).unwrap();
+    let strips = unroll(f, options).unwrap();
+    // a partition of the units
+    let mut seen = vec![0; f.units.len()];
+    for s in &strips {
+        for &u in &s.units {
+            seen[u] += 1;
+        }
+        assert_eq!(s.tiles.len(), s.units.len());
+        assert_eq!(s.pins.len() + 1, s.units.len());
+        assert!(
+            s.size[0] <= options.max_length + 1e-9,
+            "{} {:?}",
+            s.id,
+            s.size
+        );
+    }
+    assert!(seen.iter().all(|&n| n == 1), "{seen:?}");
+    // labels
+    let labels = unit_labels(&strips, f.units.len());
+    let mut ids: Vec<&str> = labels.iter().map(|l| l.id.as_str()).collect();
+    for l in &labels {
+        let b = l.id.as_bytes();
+        assert_eq!(b.len(), 6, "{}", l.id);
+        assert!(b[0].is_ascii_uppercase() && b[1..3].iter().all(u8::is_ascii_digit));
+        assert_eq!(b[3], b'-');
+        assert!(b[4..].iter().all(u8::is_ascii_digit));
+        assert!(l.id.starts_with(&l.strip));
+    }
+    ids.sort();
+    ids.dedup();
+    assert_eq!(ids.len(), f.units.len());
+    for s in &strips {
+        // congruence: all six corner distances
+        for (&u, flat) in s.units.iter().zip(&s.tiles) {
+            let t = &tiles.tiles[u];
+            for i in 0..4 {
+                for j in (i + 1)..4 {
+                    let e = (dist3(&t[i], &t[j]) - dist2(&flat[i], &flat[j])).abs();
+                    assert!(
+                        e < 1e-6,
+                        "strip {} unit {u}: corner {i}-{j} off by {e}",
+                        s.id
+                    );
+                }
+            }
+            // counter-clockwise (not mirrored)
+            assert!(cross(flat[1] - flat[0], flat[2] - flat[0]) > 0.0);
+        }
+        for (j, pin) in s.pins.iter().enumerate() {
+            let (tf, tg) = (&s.tiles[j], &s.tiles[j + 1]);
+            let [k, m] = pin.sides;
+            let (a, b) = (tf[k], tf[(k + 1) % 4]);
+            let (c, d) = (tg[m], tg[(m + 1) % 4]);
+            let u = (b - a).normalize();
+            // collinear facing sides
+            assert!(cross(u, c - a).abs() < 1e-6 && cross(u, d - a).abs() < 1e-6);
+            // pin points coincide
+            let pf = a + (b - a) * pin.along[0];
+            let pg = c + (d - c) * pin.along[1];
+            assert!(dist2(&pf, &pg) < 1e-6 && dist2(&pf, &pin.point) < 1e-6);
+            // tiles on opposite sides of the line
+            let cf = tf
+                .iter()
+                .fold(sv_geom::Vector2::zeros(), |s, p| s + p.coords)
+                / 4.0;
+            let cg = tg
+                .iter()
+                .fold(sv_geom::Vector2::zeros(), |s, p| s + p.coords)
+                / 4.0;
+            assert!(cross(u, cf - a.coords) > 1.0 && cross(u, cg - a.coords) < -1.0);
+            assert!(pin.twist >= 0.0 && pin.twist < 0.5, "{pin:?}");
+            assert!(pin.bend.abs() < 0.5 && pin.gap >= 0.0, "{pin:?}");
+        }
+        // no two tiles overlap
+        for i in 0..s.tiles.len() {
+            for j in (i + 1)..s.tiles.len() {
+                let a = convex_intersection_area(&s.tiles[i], &s.tiles[j]);
+                assert!(a <= options.overlap_area_tolerance, "{} {i} {j}: {a}", s.id);
+            }
+        }
+    }
+}
+
+#[test]
+fn sphere_cap_and_saddle_unroll_in_both_directions() {
+    for f in [cap(), saddle()] {
+        for direction in [StripDirection::U, StripDirection::V] {
+            let options = StripOptions {
+                direction,
+                ..Default::default()
+            };
+            check_unrolled(&f, &options);
+            let strips = unroll(&f, &options).unwrap();
+            assert_eq!(strips.len(), 6, "one strip per row of a 6 x 6 grid");
+            // the curved strips are not flat: joints bend
+            assert!(strips
+                .iter()
+                .flat_map(|s| &s.pins)
+                .any(|p| p.bend.abs() > 1e-3));
+        }
+    }
+}
+
+#[test]
+fn strips_follow_the_grid_rows_and_columns() {
+    let f = cap();
+    let u = unroll(&f, &StripOptions::default()).unwrap();
+    assert_eq!(u[0].units, vec![0, 1, 2, 3, 4, 5]);
+    assert_eq!(u[1].id, "A02");
+    let v = unroll(
+        &f,
+        &StripOptions {
+            direction: StripDirection::V,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(v[0].units, vec![0, 6, 12, 18, 24, 30]);
+}
+
+#[test]
+fn long_strips_are_split_at_the_sheet_length() {
+    let f = cap();
+    let options = StripOptions {
+        max_length: 1000.0,
+        ..Default::default()
+    };
+    check_unrolled(&f, &options);
+    let strips = unroll(&f, &options).unwrap();
+    assert!(strips.len() > 6);
+    assert!(strips.iter().all(|s| s.size[0] <= 1000.0));
+    // a tile longer than the sheet cannot be cut
+    let e = unroll(
+        &f,
+        &StripOptions {
+            max_length: 100.0,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(matches!(e, StripsError::Unit { unit: 0, .. }), "{e}");
+}
+
+#[test]
+fn a_strip_that_would_overlap_itself_is_split() {
+    // Rhombic tiles have parallel opposite sides, so a chain of them unrolls straight; the
+    // overlap guard matters for other tiles. Here: the trapezoids of a flat annulus, 1.5
+    // turns, which unroll into a ring that runs over itself after one turn.
+    let n = 24;
+    let corner = |i: usize, j: usize| {
+        let a = i as f64 / 16.0 * std::f64::consts::TAU;
+        let r = 600.0 + 300.0 * j as f64;
+        Point3::new(r * a.cos(), r * a.sin(), 0.0)
+    };
+    let tiles = TileSet {
+        tiles: (0..n)
+            .map(|i| {
+                [
+                    corner(i, 0),
+                    corner(i + 1, 0),
+                    corner(i + 1, 1),
+                    corner(i, 1),
+                ]
+            })
+            .collect(),
+        across: (0..n)
+            .map(|i| {
+                let mut a = [None; 4];
+                if i > 0 {
+                    a[3] = Some((i - 1, 1));
+                }
+                if i + 1 < n {
+                    a[1] = Some((i + 1, 3));
+                }
+                a
+            })
+            .collect(),
+    };
+    let options = StripOptions {
+        max_length: 1e6,
+        ..Default::default()
+    };
+    let strips = sv_strips::unroll_tiles(&tiles, &options).unwrap();
+    assert_eq!(
+        strips.len(),
+        2,
+        "{:?}",
+        strips.iter().map(|s| s.units.len()).collect::<Vec<_>>()
+    );
+    assert_eq!(
+        strips[0].units.len(),
+        16,
+        "one full turn fits, the 17th tile would overlap"
+    );
+    for s in &strips {
+        for i in 0..s.tiles.len() {
+            for j in (i + 1)..s.tiles.len() {
+                assert!(convex_intersection_area(&s.tiles[i], &s.tiles[j]) <= 1e-3);
+            }
+        }
+    }
+}
+
+#[test]
+fn profiles_pass_the_design_rules() {
+    let params = ProfileParams::default();
+    for f in [cap(), saddle()] {
+        let options = StripOptions::default();
+        let strips = unroll(&f, &options).unwrap();
+        let labels = unit_labels(&strips, f.units.len());
+        let mut profiles = Vec::new();
+        for s in &strips {
+            let names: Vec<String> = s.units.iter().map(|&u| labels[u].id.clone()).collect();
+            let p = profile_strip(s, &names, &params).unwrap();
+            assert_eq!(p.cuts.len(), 4 * s.units.len());
+            assert!(p.outline.signed_area() > 0.0);
+            assert!(p.cuts.iter().all(|c| c.signed_area() < 0.0));
+            assert!(p.area > 0.0 && p.area < p.outline.signed_area());
+            assert_eq!(p.labels.len(), s.units.len());
+            assert_eq!(p.labels[0].text, names[0]);
+            assert_eq!(p.fold_marks.len(), 8 * s.units.len() + s.pins.len());
+            let v = check_profile(s, &p, &params);
+            assert!(
+                v.is_empty(),
+                "{}",
+                v.iter()
+                    .map(|v| v.to_string())
+                    .collect::<Vec<_>>()
+                    .join("\n")
+            );
+            profiles.push(p);
+        }
+        let file = StripsFile::new(
+            &strips,
+            &profiles,
+            &params,
+            f.params.expansion,
+            options.max_length,
+        );
+        let json = serde_json::to_value(&file).unwrap();
+        assert_eq!(json["format"], "spin-valence/strips");
+        assert_eq!(json["version"], 1);
+        assert_eq!(json["length_unit"], "mm");
+        assert_eq!(json["params"]["thickness"], 3.0);
+        assert_eq!(json["params"]["min_web"], 4.5);
+        let s0 = &json["strips"][0];
+        assert_eq!(s0["id"], "A01");
+        assert_eq!(s0["flat"][0]["primary"].as_array().unwrap().len(), 4);
+        assert_eq!(s0["outline"][0].as_array().unwrap().len(), 3);
+        assert_eq!(s0["cuts"][0][0].as_array().unwrap().len(), 3);
+        assert!(s0["area_mm2"].as_f64().unwrap() > 0.0);
+        let back: StripsFile = serde_json::from_value(json).unwrap();
+        assert_eq!(back, file);
+    }
+}
+
+#[test]
+fn the_design_rule_check_catches_a_thin_web() {
+    let params = ProfileParams::default();
+    let f = cap();
+    let strips = unroll(&f, &StripOptions::default()).unwrap();
+    let names = vec![String::from("A01-01"); strips[0].units.len()];
+    let mut p = profile_strip(&strips[0], &names, &params).unwrap();
+    // move the first cut toward the second one by most of the web between them
+    let shift = {
+        let a = &p.cuts[0].0[0];
+        let b = &p.cuts[1].0[0];
+        [b[0] - a[0], b[1] - a[1]]
+    };
+    for v in &mut p.cuts[0].0 {
+        v[0] += shift[0] * 0.97;
+        v[1] += shift[1] * 0.97;
+    }
+    let v = check_profile(&strips[0], &p, &params);
+    assert!(
+        v.iter()
+            .any(|v| v.rule == sv_strips::DrcRule::MinWeb && v.unit == Some(strips[0].units[0])),
+        "{v:?}"
+    );
+    // a slot end made square is caught
+    let mut p = profile_strip(&strips[0], &names, &params).unwrap();
+    for v in &mut p.cuts[2].0 {
+        v[2] = 0.0;
+    }
+    let v = check_profile(&strips[0], &p, &params);
+    assert!(
+        v.iter().any(|v| v.rule == sv_strips::DrcRule::SlotEnd),
+        "{v:?}"
+    );
+}
+
+#[test]
+fn bad_parameters_name_the_parameter() {
+    let f = cap();
+    let strips = unroll(&f, &StripOptions::default()).unwrap();
+    let bad = ProfileParams {
+        neck_width: 30.0,
+        ..Default::default()
+    };
+    let e = profile_strip(&strips[0], &[], &bad).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            StripsError::Parameter {
+                name: "neck_width",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = unroll(
+        &f,
+        &StripOptions {
+            max_length: f64::NAN,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("max_length"), "{e}");
+}
