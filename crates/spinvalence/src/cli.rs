@@ -243,6 +243,15 @@ pub struct CheckArgs {
     pub frame: PathBuf,
 }
 
+/// `u` or `v`, as in the config file.
+fn parse_direction(text: &str) -> Result<sv_strips::StripDirection, String> {
+    match text {
+        "u" | "U" => Ok(sv_strips::StripDirection::U),
+        "v" | "V" => Ok(sv_strips::StripDirection::V),
+        _ => Err(format!("`{text}` is not a strip direction (u or v)")),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -262,14 +271,5 @@ mod tests {
         };
         assert!((args.spin_angle.to_radians() - sv_frame::DEFAULT_SPIN_ANGLE).abs() < 1e-15);
         assert_eq!(SidePolicy::from(args.side), SolveOptions::default().side);
-    }
-}
-
-/// `u` or `v`, as in the config file.
-fn parse_direction(text: &str) -> Result<sv_strips::StripDirection, String> {
-    match text {
-        "u" | "U" => Ok(sv_strips::StripDirection::U),
-        "v" | "V" => Ok(sv_strips::StripDirection::V),
-        _ => Err(format!("`{text}` is not a strip direction (u or v)")),
     }
 }

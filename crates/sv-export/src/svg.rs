@@ -176,6 +176,14 @@ pub fn strip_svg(strip: &FlatStrip, profile: &StripProfile, params: &ProfilePara
     s
 }
 
+/// Text for an SVG attribute or element.
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -186,12 +194,4 @@ mod tests {
         assert_eq!(bar_length(3000.0), 500.0);
         assert_eq!(bar_length(20.0), 10.0);
     }
-}
-
-/// Text for an SVG attribute or element.
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
