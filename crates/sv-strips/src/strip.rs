@@ -338,46 +338,21 @@ pub fn unroll_tiles(
     options.validate()?;
     let mut pieces: Vec<Piece> = Vec::new();
     for chain in chains(tiles, options.direction) {
-        let first = chain[0];
-        let t0 = flatten(&tiles.tiles[first]);
-        let (_, long0, _) = min_area_rect(&t0);
-        if long0 > options.max_length {
-            return Err(StripsError::Unit {
-                strip: "-".into(),
-                unit: first,
-                why: format!(
-                    "flat tile is {long0:.1} mm long, more than max_length {}",
-                    options.max_length
-                ),
-            });
-        }
-        let mut piece = Piece::start(tiles, first);
-        for w in chain.windows(2) {
-            let (f, g) = (w[0], w[1]);
-            let k = (0..4)
-                .find(|&k| tiles.across[f][k].map(|x| x.0) == Some(g))
-                .ok_or_else(|| StripsError::Internal {
-                    why: format!("chain step {f} -> {g} without a link"),
-                })?;
-            let m = tiles.across[f][k].map(|x| x.1).unwrap_or(0);
-            let last = *piece.tiles.last().ok_or_else(|| StripsError::Internal {
-                why: "empty strip piece".into(),
-            })?;
-            let (placed, pin) = place_next(tiles, f, &last, k, g, m);
-            let fits = piece
-                .overlap(&placed, options.overlap_area_tolerance)
-                .is_none()
-                && piece.length_with(&placed) <= options.max_length;
-            if fits {
-                piece.units.push(g);
-                piece.boxes.push(bbox(&placed));
-                piece.tiles.push(placed);
-                piece.pins.push(pin);
-            } else {
-                pieces.push(std::mem::replace(&mut piece, Piece::start(tiles, g)));
+        // Greedy first; when that leaves a short last piece, split the chain again into
+        // as many pieces of at most ceil(n / k) units each, which balances them (no
+        // one-unit stub at the end of a long strip) when it needs no more pieces.
+        let greedy = split_chain(tiles, &chain, options, usize::MAX)?;
+        let k = greedy.len();
+        let shortest = greedy.iter().map(|p| p.units.len()).min().unwrap_or(0);
+        let cap = chain.len().div_ceil(k);
+        if k > 1 && shortest < cap {
+            let balanced = split_chain(tiles, &chain, options, cap)?;
+            if balanced.len() == k {
+                pieces.extend(balanced);
+                continue;
             }
         }
-        pieces.push(piece);
+        pieces.extend(greedy);
     }
     pieces
         .into_iter()
@@ -387,6 +362,59 @@ pub fn unroll_tiles(
             Ok(normalise(id, p))
         })
         .collect()
+}
+
+/// Split one chain into pieces, greedily: a piece ends where the next tile would overlap
+/// it, make it longer than `options.max_length`, or make it more than `cap` units long.
+fn split_chain(
+    tiles: &TileSet,
+    chain: &[usize],
+    options: &StripOptions,
+    cap: usize,
+) -> Result<Vec<Piece>, StripsError> {
+    let mut pieces = Vec::new();
+    let first = chain[0];
+    let t0 = flatten(&tiles.tiles[first]);
+    let (_, long0, _) = min_area_rect(&t0);
+    if long0 > options.max_length {
+        return Err(StripsError::Unit {
+            strip: "-".into(),
+            unit: first,
+            why: format!(
+                "flat tile is {long0:.1} mm long, more than max_length {}",
+                options.max_length
+            ),
+        });
+    }
+    let mut piece = Piece::start(tiles, first);
+    for w in chain.windows(2) {
+        let (f, g) = (w[0], w[1]);
+        let k = (0..4)
+            .find(|&k| tiles.across[f][k].map(|x| x.0) == Some(g))
+            .ok_or_else(|| StripsError::Internal {
+                why: format!("chain step {f} -> {g} without a link"),
+            })?;
+        let m = tiles.across[f][k].map(|x| x.1).unwrap_or(0);
+        let last = *piece.tiles.last().ok_or_else(|| StripsError::Internal {
+            why: "empty strip piece".into(),
+        })?;
+        let (placed, pin) = place_next(tiles, f, &last, k, g, m);
+        let fits = piece
+            .overlap(&placed, options.overlap_area_tolerance)
+            .is_none()
+            && piece.length_with(&placed) <= options.max_length
+            && piece.units.len() < cap;
+        if fits {
+            piece.units.push(g);
+            piece.boxes.push(bbox(&placed));
+            piece.tiles.push(placed);
+            piece.pins.push(pin);
+        } else {
+            pieces.push(std::mem::replace(&mut piece, Piece::start(tiles, g)));
+        }
+    }
+    pieces.push(piece);
+    Ok(pieces)
 }
 
 /// Rotate and translate a piece so its minimum-area rectangle is axis-aligned, long side on x.
