@@ -4,10 +4,20 @@ CARGO ?= cargo
 
 export PROPTEST_RNG_SEED ?= 20261122
 
-.PHONY: test toolchain fmt-check clippy unit-tests bench bench-primary fixtures
+.PHONY: test toolchain browser fmt-check clippy unit-tests bench bench-primary fixtures bench-stream
 
 ## Everything CI checks: formatting, lints (warnings denied), unit, integration, e2e and doc tests.
-test: toolchain fmt-check clippy unit-tests
+test: toolchain browser fmt-check clippy unit-tests
+
+## Headless Chromium for the browser tests (the AR client, the build report), from Debian's
+## packages when it is missing.
+browser:
+	@if ! command -v chromium >/dev/null 2>&1; then \
+		echo "installing chromium from Debian packages for the browser tests"; \
+		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+		$$SUDO apt-get update -qq && \
+		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq chromium; \
+	fi
 
 ## rustfmt and clippy, added through rustup when missing.
 toolchain:
@@ -37,3 +47,8 @@ bench-primary:
 ## Regenerate the OBJ fixtures in fixtures/ (a test fails when they are stale).
 fixtures:
 	$(CARGO) run -p spinvalence --example make_fixtures
+
+## AR streamer load test: 50 websocket clients x 30 track/s x 10 s on loopback; prints sent,
+## checked, coalesced and lost messages and the track -> check latency (docs/protocol.md).
+bench-stream:
+	$(CARGO) run --release -p sv-stream --example load -- --clients 50 --rate 30 --seconds 10

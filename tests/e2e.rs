@@ -19,5 +19,7 @@ mod cli;
 mod hygiene;
 #[path = "e2e/nest.rs"]
 mod nest;
+#[path = "e2e/serve.rs"]
+mod serve;
 #[path = "e2e/solve.rs"]
 mod solve;

@@ -57,6 +57,8 @@ pub enum Command {
     /// Target surface to deployed frame: hub mesh, primary solve, files in DIR (default ./out).
     #[command(after_help = BUILD_EXAMPLES)]
     Build(BuildArgs),
+    /// Serve a frame to AR clients: target poses and tolerance checks over a websocket, the page at /.
+    Serve(crate::serve::ServeArgs),
 }
 
 const BUILD_EXAMPLES: &str = "\

@@ -10,6 +10,7 @@ mod cli;
 mod config;
 mod nest;
 mod output;
+mod serve;
 mod solve;
 mod strips;
 
@@ -70,6 +71,10 @@ fn run(cli: &Cli) -> Result<ExitCode> {
         }),
         Command::Nest(args) => {
             nest::run(args)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Serve(args) => {
+            serve::run(args)?;
             Ok(ExitCode::SUCCESS)
         }
         Command::Build(args) => {

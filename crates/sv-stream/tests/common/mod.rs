@@ -1,0 +1,171 @@
+//! Shared test helpers: a solved frame, a websocket client that validates every received
+//! message against `schema/<type>.json`.
+#![allow(dead_code)]
+
+use std::collections::HashMap;
+use std::sync::OnceLock;
+use std::time::Duration;
+
+use futures_util::{SinkExt, StreamExt};
+use serde_json::{json, Value};
+use sv_frame::{solve, FrameFile, QuadMesh, SolveOptions};
+use sv_stream::{ServeConfig, Server};
+use tokio::io::{AsyncRead, AsyncWrite};
+use tokio::net::TcpStream;
+use tokio_tungstenite::tungstenite::client::IntoClientRequest;
+use tokio_tungstenite::tungstenite::Message;
+use tokio_tungstenite::WebSocketStream;
+
+/// Operator token used by the tests.
+pub const TOKEN: &str = "op-secret";
+/// Viewer token used by the tests.
+pub const VIEWER: &str = "view-secret";
+
+/// A 6x6 sphere cap frame (R 3000 mm, 300 mm units), strips by mesh row.
+pub fn frame() -> FrameFile {
+    static FRAME: OnceLock<FrameFile> = OnceLock::new();
+    FRAME
+        .get_or_init(|| {
+            let mesh = QuadMesh::sphere_cap(6, 6, 3000.0, 300.0);
+            let solved = solve(&mesh, &SolveOptions::default(), &mut |_| {}).unwrap();
+            let mut file = solved.to_frame_file(&mesh);
+            for u in &mut file.units {
+                if u.strip.is_empty() {
+                    u.strip = format!("S{}", u.face / 6);
+                }
+            }
+            file
+        })
+        .clone()
+}
+
+/// A config with both tokens on an ephemeral port.
+pub fn config() -> ServeConfig {
+    let mut c = ServeConfig::new(frame());
+    c.bind = "127.0.0.1:0".into();
+    c.token = Some(TOKEN.into());
+    c.viewer_token = Some(VIEWER.into());
+    c
+}
+
+fn validators() -> &'static HashMap<String, jsonschema::Validator> {
+    static V: OnceLock<HashMap<String, jsonschema::Validator>> = OnceLock::new();
+    V.get_or_init(|| {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/schema");
+        let mut map = HashMap::new();
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            let schema: Value =
+                serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            let name = path.file_stem().unwrap().to_string_lossy().to_string();
+            map.insert(name, jsonschema::validator_for(&schema).unwrap());
+        }
+        map
+    })
+}
+
+/// Panic unless `msg` is valid against the schema named by its `type`.
+pub fn validate(msg: &Value) {
+    let kind = msg["type"].as_str().expect("message has a type");
+    let v = validators()
+        .get(kind)
+        .unwrap_or_else(|| panic!("no schema for {kind}"));
+    if let Err(e) = v.validate(msg) {
+        panic!("{kind} violates its schema: {e}\n{msg}");
+    }
+    if kind == "ready" {
+        for ev in msg["events"].as_array().into_iter().flatten() {
+            validate(ev);
+        }
+    }
+}
+
+/// A test client.
+pub struct Client<S> {
+    pub ws: WebSocketStream<S>,
+}
+
+/// Connect over plain TCP with the subprotocol.
+pub async fn connect(server: &Server) -> Client<TcpStream> {
+    let tcp = TcpStream::connect(server.local_addr()).await.unwrap();
+    connect_on(tcp, &format!("ws://{}/ws", server.local_addr())).await
+}
+
+/// Handshake on an existing stream.
+pub async fn connect_on<S: AsyncRead + AsyncWrite + Unpin>(stream: S, url: &str) -> Client<S> {
+    let mut req = url.into_client_request().unwrap();
+    req.headers_mut()
+        .insert("sec-websocket-protocol", "spinvalence.v1".parse().unwrap());
+    let (ws, resp) = tokio_tungstenite::client_async(req, stream).await.unwrap();
+    assert_eq!(
+        resp.headers().get("sec-websocket-protocol").unwrap(),
+        "spinvalence.v1"
+    );
+    Client { ws }
+}
+
+impl<S: AsyncRead + AsyncWrite + Unpin> Client<S> {
+    /// Send a JSON value as text.
+    pub async fn send(&mut self, v: Value) {
+        self.ws.send(Message::text(v.to_string())).await.unwrap();
+    }
+
+    /// Send raw text.
+    pub async fn send_raw(&mut self, t: &str) {
+        self.ws.send(Message::text(t.to_string())).await.unwrap();
+    }
+
+    /// Next text message (validated), or `None` when the connection ends.
+    pub async fn try_recv(&mut self, wait: Duration) -> Option<Result<Value, Option<u16>>> {
+        loop {
+            let next = tokio::time::timeout(wait, self.ws.next()).await.ok()?;
+            match next {
+                Some(Ok(Message::Text(t))) => {
+                    let v: Value = serde_json::from_str(t.as_str()).unwrap();
+                    validate(&v);
+                    return Some(Ok(v));
+                }
+                Some(Ok(Message::Close(frame))) => {
+                    return Some(Err(frame.map(|f| u16::from(f.code))));
+                }
+                Some(Ok(_)) => continue,
+                Some(Err(_)) | None => return Some(Err(None)),
+            }
+        }
+    }
+
+    /// Next text message (validated); panics on timeout or close.
+    pub async fn recv(&mut self) -> Value {
+        match self.try_recv(Duration::from_secs(5)).await {
+            Some(Ok(v)) => v,
+            other => panic!("expected a message, got {other:?}"),
+        }
+    }
+
+    /// Next message, which must have this type.
+    pub async fn expect(&mut self, kind: &str) -> Value {
+        let v = self.recv().await;
+        assert_eq!(v["type"], kind, "unexpected message {v}");
+        v
+    }
+
+    /// Welcome + hello + ready with a token.
+    pub async fn join(&mut self, token: &str, client_id: &str) -> (Value, Value) {
+        let welcome = self.expect("welcome").await;
+        self.send(json!({"type": "hello", "token": token, "client_id": client_id}))
+            .await;
+        let ready = self.expect("ready").await;
+        (welcome, ready)
+    }
+
+    /// Wait for the close code (skipping messages).
+    pub async fn closed(&mut self) -> Option<u16> {
+        loop {
+            match self.try_recv(Duration::from_secs(5)).await {
+                Some(Ok(_)) => continue,
+                Some(Err(code)) => return code,
+                None => panic!("connection did not close"),
+            }
+        }
+    }
+}
