@@ -1,4 +1,5 @@
-//! Writes the DXF and SVG of every strip of a sphere cap and checks them, the DXF with
+//! Writes the DXF and SVG of every strip of a sphere cap and of the default pavilion build
+//! and checks them, the DXF with
 //! ezdxf's auditor (an independent reader). The test creates the Python venv with ezdxf
 //! under `target/ezdxf-venv` when it is missing; it never skips.
 
@@ -8,14 +9,32 @@ use std::process::Command;
 use sv_frame::{solve, QuadMesh, SolveOptions};
 use sv_strips::{profile_strip, unit_labels, unroll, ProfileParams, StripOptions, StripProfile};
 
+/// The strips of a sphere cap and of the default build (the built-in pavilion through the
+/// library stages `spinvalence build` runs, default options).
 fn strips() -> Vec<(sv_strips::FlatStrip, StripProfile)> {
-    let mesh = QuadMesh::sphere_cap(6, 6, 3000.0, 300.0);
-    let frame = solve(&mesh, &SolveOptions::default(), &mut |_| {})
+    let cap = QuadMesh::sphere_cap(6, 6, 3000.0, 300.0);
+    let pavilion = sv_surface::builtin_target("pavilion").unwrap();
+    let (pavilion, _) = sv_surface::build_secondary(
+        &pavilion,
+        &sv_surface::SecondaryOptions::default(),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let mut out = strips_of(&cap, "cap-");
+    out.extend(strips_of(&pavilion, "pavilion-"));
+    out
+}
+
+fn strips_of(mesh: &QuadMesh, prefix: &str) -> Vec<(sv_strips::FlatStrip, StripProfile)> {
+    let frame = solve(mesh, &SolveOptions::default(), &mut |_| {})
         .unwrap()
-        .to_frame_file(&mesh);
-    let strips = unroll(&frame, &StripOptions::default()).unwrap();
+        .to_frame_file(mesh);
+    let mut strips = unroll(&frame, &StripOptions::default()).unwrap();
     let labels = unit_labels(&strips, frame.units.len());
     let params = ProfileParams::default();
+    for s in &mut strips {
+        s.id = format!("{prefix}{}", s.id);
+    }
     strips
         .into_iter()
         .map(|s| {
@@ -106,6 +125,14 @@ fn every_strip_svg_has_title_labels_folds_and_scale_bar() {
         assert!(svg.contains(" mm</text>"), "scale bar");
         assert!(svg.matches("stroke=\"#d22\"").count() >= p.fold_marks.len());
         assert!(svg.matches("stroke=\"#2a7\"").count() >= p.labels.len());
+        for l in &p.labels {
+            assert!(
+                svg.contains(&format!("<title>{}</title>", l.text)),
+                "{}: label {} is named in the drawing",
+                s.id,
+                l.text
+            );
+        }
         // one path holds the outline and all cuts
         assert_eq!(svg.matches('Z').count(), 1 + p.cuts.len());
         std::fs::write(dir.join(format!("{}.svg", s.id)), svg).unwrap();
