@@ -985,16 +985,16 @@ fn static_file(path: &str) -> Option<(&'static str, &'static [u8])> {
             include_bytes!("../client/index.html"),
         ),
         "/app.js" => (JS, include_bytes!("../client/app.js")),
-        "/viewer.js" => (JS, include_bytes!("../client/viewer.js")),
+        "/viewer.js" => (JS, sv_viewer::VIEWER_JS.as_bytes()),
         "/style.css" => (
             "text/css; charset=utf-8",
             include_bytes!("../client/style.css"),
         ),
-        "/vendor/three.module.js" => (JS, include_bytes!("../client/vendor/three.module.js")),
-        "/vendor/OrbitControls.js" => (JS, include_bytes!("../client/vendor/OrbitControls.js")),
+        "/vendor/three.module.js" => (JS, sv_viewer::THREE_JS.as_bytes()),
+        "/vendor/OrbitControls.js" => (JS, sv_viewer::ORBIT_CONTROLS_JS.as_bytes()),
         "/vendor/LICENSE-three.txt" => (
             "text/plain; charset=utf-8",
-            include_bytes!("../client/vendor/LICENSE-three.txt"),
+            sv_viewer::THREE_LICENSE.as_bytes(),
         ),
         _ => return None,
     })

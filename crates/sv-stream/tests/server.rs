@@ -266,6 +266,7 @@ async fn handshake_needs_subprotocol_and_page_is_served() {
         ("/viewer.js", "200", "export"),
         ("/vendor/three.module.js", "200", "REVISION"),
         ("/vendor/OrbitControls.js", "200", "./three.module.js"),
+        ("/", "200", "rel=\"icon\" href=\"data:,\""),
         ("/nope", "404", "not found"),
     ] {
         let mut tcp = tokio::net::TcpStream::connect(server.local_addr())

@@ -1,17 +1,27 @@
 // 3D view of a deployed Spin-Valence frame (three.js, vendored ES modules). Shared by the
-// deployment page (`spinvalence serve`) and the build report.
+// deployment page (`spinvalence serve`) and the build report (`DIR/report.html`), which
+// embeds this file (crate sv-viewer).
 //
-//   const view = createFrameView(container, { units, background });
-//   units: [{ id, strip, hub: [[x, y, z] x 4], primary: [[x, y, z] x 4] }]  (mm, Z up)
+//   const view = createFrameView(container, { units, background, expansion });
+//   units: [{ id, strip, hub: [[x, y, z] x 4], primary: [[x, y, z] x 4] }]  (mm, Z up;
+//          frame.json order: leg i joins hub corner i to primary corner i + 1)
+//   expansion: primary tiles drawn scaled by e about their centroids (fig. 11), default 1
 //   view.setColours(fnOrMap)          per-unit css colour: fn(id) -> colour, or Map / object
+//   view.setLayers({hubs, primaries, legs})  show or hide each layer (booleans)
 //   view.highlight(id | null)         outline one unit
 //   view.setGhost(id, pose | null)    the unit's hub as a translucent ghost at a pose
 //                                     ({position: [x, y, z], rotation: [x, y, z, w]})
 //   view.setMarker(position, move_mm, colour)  tracked point and the arrow to its target
 //                                     (position null hides it)
 //   view.onPick(cb)                   cb(id) when a unit is clicked
+//   view.unitAt(x, y)                 id of the unit under a client point, or null
+//   view.project(id)                  client {x, y} of the unit's hub centre, or null
+//   view.resetCamera()                look at the whole frame again
 //   view.renderer / view.scene / view.camera   for WebXR
 //   view.dispose()
+//
+// All units share one mesh per layer (hubs, primary tiles, edges, legs) with per-vertex
+// colours, so a frame of thousands of units is a handful of draw calls.
 
 import * as THREE from './vendor/three.module.js';
 import { OrbitControls } from './vendor/OrbitControls.js';
@@ -54,7 +64,51 @@ function loopGeometry(corners) {
   return new THREE.BufferGeometry().setFromPoints(corners.map(v3));
 }
 
-export function createFrameView(container, { units = [], background = '#101317' } = {}) {
+function scaled(corners, e) {
+  if (e === 1) return corners;
+  const c = [0, 1, 2].map((k) => corners.reduce((s, p) => s + p[k], 0) / corners.length);
+  return corners.map((p) => p.map((x, k) => c[k] + e * (x - c[k])));
+}
+
+// One geometry of quads (two triangles each, four vertices per unit) with vertex colours.
+function quadsGeometry(quads) {
+  const n = quads.length;
+  const pos = new Float32Array(n * 12);
+  const index = new Uint32Array(n * 6);
+  quads.forEach((q, u) => {
+    for (let i = 0; i < 4; i++) for (let k = 0; k < 3; k++) pos[12 * u + 3 * i + k] = q[i][k];
+    index.set([0, 1, 2, 0, 2, 3].map((j) => 4 * u + j), 6 * u);
+  });
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+  g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(n * 12), 3));
+  g.setIndex(new THREE.BufferAttribute(index, 1));
+  g.computeVertexNormals();
+  return g;
+}
+
+// Line segments: `segments(u)` lists [a, b] point pairs of unit u; vertex colours.
+function segmentsGeometry(units, segments) {
+  const pts = [];
+  const owner = [];
+  units.forEach((u, i) => {
+    for (const [a, b] of segments(u)) {
+      pts.push(...a, ...b);
+      owner.push(i, i);
+    }
+  });
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.Float32BufferAttribute(pts, 3));
+  g.setAttribute('color', new THREE.Float32BufferAttribute(new Float32Array(pts.length), 3));
+  g.userData.owner = owner;
+  return g;
+}
+
+function edges(q) {
+  return [0, 1, 2, 3].map((i) => [q[i], q[(i + 1) % 4]]);
+}
+
+export function createFrameView(container, { units = [], background = '#101317', expansion = 1 } = {}) {
   const renderer = new THREE.WebGLRenderer({ antialias: true, alpha: true });
   renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
   container.append(renderer.domElement);
@@ -66,55 +120,43 @@ export function createFrameView(container, { units = [], background = '#101317' 
   sun.position.set(1, -2, 3);
   scene.add(sun);
 
-  // frame data, Z up, mm
+  // frame data, Z up, mm: one mesh per layer
+  const e = Number.isFinite(expansion) && expansion > 0 ? expansion : 1;
+  const tiles = units.map((u) => scaled(u.primary, e));
   const root = new THREE.Group();
   scene.add(root);
-  const records = new Map();
-  const pickable = [];
+  const hubs = new THREE.Mesh(quadsGeometry(units.map((u) => u.hub)),
+    new THREE.MeshStandardMaterial({
+      vertexColors: true, side: THREE.DoubleSide, metalness: 0.2, roughness: 0.6,
+    }));
+  const primaries = new THREE.Mesh(quadsGeometry(tiles),
+    new THREE.MeshStandardMaterial({
+      vertexColors: true, side: THREE.DoubleSide, transparent: true, opacity: 0.35,
+      metalness: 0.1, roughness: 0.8, depthWrite: false,
+    }));
+  const hubEdges = new THREE.LineSegments(segmentsGeometry(units, (u) => edges(u.hub)),
+    new THREE.LineBasicMaterial({ color: 0x202124 }));
+  const primEdges = new THREE.LineSegments(segmentsGeometry(tiles, (q) => edges(q)),
+    new THREE.LineBasicMaterial({ vertexColors: true }));
+  // leg i: hub corner i to primary corner i + 1 (model.md, frame.obj)
+  const legs = new THREE.LineSegments(
+    segmentsGeometry(units, (u) => [0, 1, 2, 3].map((i) => [u.hub[i], u.primary[(i + 1) % 4]])),
+    new THREE.LineBasicMaterial({ color: 0x5f6368 }));
+  root.add(hubs, hubEdges, primaries, primEdges, legs);
+  const layers = { hubs: [hubs, hubEdges], primaries: [primaries, primEdges], legs: [legs] };
+
+  const index = new Map();
+  units.forEach((u, i) => index.set(u.id, i));
   const box = new THREE.Box3();
   let edgeSum = 0;
   let edgeCount = 0;
-  for (const u of units) {
-    const colour = new THREE.Color(DEFAULT_COLOUR);
-    const hubMat = new THREE.MeshStandardMaterial({
-      color: colour, side: THREE.DoubleSide, metalness: 0.2, roughness: 0.6,
-    });
-    const hub = new THREE.Mesh(quadGeometry(u.hub), hubMat);
-    hub.userData.unit = u.id;
-    const hubEdge = new THREE.LineLoop(loopGeometry(u.hub),
-      new THREE.LineBasicMaterial({ color: 0x202124 }));
-    const primMat = new THREE.MeshStandardMaterial({
-      color: colour, side: THREE.DoubleSide, transparent: true, opacity: 0.35,
-      metalness: 0.1, roughness: 0.8, depthWrite: false,
-    });
-    const primary = new THREE.Mesh(quadGeometry(u.primary), primMat);
-    primary.userData.unit = u.id;
-    const primEdge = new THREE.LineLoop(loopGeometry(u.primary),
-      new THREE.LineBasicMaterial({ color: colour }));
-    // the legs: hub corner i to the nearest primary corner
-    const legPts = [];
-    for (const h of u.hub) {
-      let best = u.primary[0];
-      let bestD = Infinity;
-      for (const p of u.primary) {
-        const d = (p[0] - h[0]) ** 2 + (p[1] - h[1]) ** 2 + (p[2] - h[2]) ** 2;
-        if (d < bestD) { bestD = d; best = p; }
-      }
-      legPts.push(v3(h), v3(best));
-    }
-    const legs = new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(legPts),
-      new THREE.LineBasicMaterial({ color: 0x5f6368 }));
-    const group = new THREE.Group();
-    group.add(hub, hubEdge, primary, primEdge, legs);
-    root.add(group);
-    pickable.push(hub, primary);
-    for (const p of u.hub.concat(u.primary)) box.expandByPoint(v3(p));
-    for (let i = 0; i < 4; i++) {
-      edgeSum += v3(u.hub[i]).distanceTo(v3(u.hub[(i + 1) % 4]));
+  units.forEach((u, i) => {
+    for (const p of u.hub.concat(tiles[i])) box.expandByPoint(v3(p));
+    for (let k = 0; k < 4; k++) {
+      edgeSum += v3(u.hub[k]).distanceTo(v3(u.hub[(k + 1) % 4]));
       edgeCount += 1;
     }
-    records.set(u.id, { unit: u, group, hubMat, primMat, primEdge, local: null });
-  }
+  });
   const edge = edgeCount ? edgeSum / edgeCount : 300;
 
   // camera: Z up, looking at the frame from the south-west, above
@@ -122,13 +164,17 @@ export function createFrameView(container, { units = [], background = '#101317' 
   camera.up.set(0, 0, 1);
   const centre = box.isEmpty() ? new THREE.Vector3() : box.getCenter(new THREE.Vector3());
   const radius = box.isEmpty() ? 1000 : Math.max(box.getSize(new THREE.Vector3()).length() / 2, edge);
-  camera.position.copy(centre).add(new THREE.Vector3(-0.9, -1.6, 1.3).normalize().multiplyScalar(radius * 2.4));
   camera.near = radius / 100;
   camera.far = radius * 100;
-  camera.lookAt(centre);
   const controls = new OrbitControls(camera, renderer.domElement);
-  controls.target.copy(centre);
-  controls.update();
+  function resetCamera() {
+    camera.position.copy(centre)
+      .add(new THREE.Vector3(-0.9, -1.6, 1.3).normalize().multiplyScalar(radius * 2.4));
+    camera.lookAt(centre);
+    controls.target.copy(centre);
+    controls.update();
+  }
+  resetCamera();
 
   // highlight, ghost, marker
   const highlightMat = new THREE.LineBasicMaterial({ color: HIGHLIGHT, depthTest: false });
@@ -136,6 +182,7 @@ export function createFrameView(container, { units = [], background = '#101317' 
   const ghostGroup = new THREE.Group();
   scene.add(ghostGroup);
   const ghosts = new Map();
+  const locals = new Map();
   const marker = new THREE.Group();
   marker.visible = false;
   const dotMat = new THREE.MeshBasicMaterial({ color: 0xffffff, depthTest: false });
@@ -154,6 +201,23 @@ export function createFrameView(container, { units = [], background = '#101317' 
     if (spec && typeof spec === 'object') return spec[id];
     return undefined;
   }
+
+  function paint(spec) {
+    const colours = units.map((u) => new THREE.Color(resolveColour(spec, u.id) || DEFAULT_COLOUR));
+    for (const mesh of [hubs, primaries]) {
+      const attr = mesh.geometry.getAttribute('color');
+      colours.forEach((c, u) => {
+        for (let i = 0; i < 4; i++) attr.setXYZ(4 * u + i, c.r, c.g, c.b);
+      });
+      attr.needsUpdate = true;
+    }
+    const attr = primEdges.geometry.getAttribute('color');
+    primEdges.geometry.userData.owner.forEach((u, v) => {
+      attr.setXYZ(v, colours[u].r, colours[u].g, colours[u].b);
+    });
+    attr.needsUpdate = true;
+  }
+  paint(null);
 
   // ---- rendering: on demand, paused while a WebXR session drives the renderer ----
   let frameRequested = false;
@@ -190,16 +254,22 @@ export function createFrameView(container, { units = [], background = '#101317' 
   // ---- picking ----
   const pickCallbacks = [];
   const raycaster = new THREE.Raycaster();
-  let down = null;
-  function onDown(e) { down = [e.clientX, e.clientY]; }
-  function onUp(e) {
-    if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 5) return;
+  function unitAt(x, y) {
     const r = renderer.domElement.getBoundingClientRect();
-    const ndc = new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1,
-      -((e.clientY - r.top) / r.height) * 2 + 1);
+    if (r.width === 0 || r.height === 0) return null;
+    const ndc = new THREE.Vector2(((x - r.left) / r.width) * 2 - 1, -((y - r.top) / r.height) * 2 + 1);
     raycaster.setFromCamera(ndc, camera);
+    const pickable = [hubs, primaries].filter((m) => m.visible);
     const hit = raycaster.intersectObjects(pickable, false)[0];
-    const id = hit ? hit.object.userData.unit : null;
+    if (!hit || hit.faceIndex == null) return null;
+    const u = units[Math.floor(hit.faceIndex / 2)];
+    return u ? u.id : null;
+  }
+  let down = null;
+  function onDown(ev) { down = [ev.clientX, ev.clientY]; }
+  function onUp(ev) {
+    if (!down || Math.hypot(ev.clientX - down[0], ev.clientY - down[1]) > 5) return;
+    const id = unitAt(ev.clientX, ev.clientY);
     if (id != null) for (const cb of pickCallbacks) cb(id);
   }
   renderer.domElement.addEventListener('pointerdown', onDown);
@@ -212,11 +282,15 @@ export function createFrameView(container, { units = [], background = '#101317' 
     controls,
 
     setColours(spec) {
-      for (const [id, rec] of records) {
-        const c = resolveColour(spec, id) || DEFAULT_COLOUR;
-        rec.hubMat.color.set(c);
-        rec.primMat.color.set(c);
-        rec.primEdge.material.color.set(c);
+      paint(spec);
+      requestRender();
+    },
+
+    setLayers(visible) {
+      for (const [name, objects] of Object.entries(layers)) {
+        if (visible && typeof visible[name] === 'boolean') {
+          for (const o of objects) o.visible = visible[name];
+        }
       }
       requestRender();
     },
@@ -227,14 +301,14 @@ export function createFrameView(container, { units = [], background = '#101317' 
         highlighted.traverse((o) => o.geometry && o.geometry.dispose());
         highlighted = null;
       }
-      const rec = id != null ? records.get(id) : null;
-      if (rec) {
+      const i = id != null ? index.get(id) : undefined;
+      if (i !== undefined) {
         highlighted = new THREE.Group();
-        const hub = new THREE.LineLoop(loopGeometry(rec.unit.hub), highlightMat);
-        const prim = new THREE.LineLoop(loopGeometry(rec.unit.primary), highlightMat);
+        const hub = new THREE.LineLoop(loopGeometry(units[i].hub), highlightMat);
+        const prim = new THREE.LineLoop(loopGeometry(tiles[i]), highlightMat);
         hub.renderOrder = prim.renderOrder = 5;
         highlighted.add(hub, prim);
-        rec.group.add(highlighted);
+        root.add(highlighted);
       }
       requestRender();
     },
@@ -246,20 +320,20 @@ export function createFrameView(container, { units = [], background = '#101317' 
         old.traverse((o) => o.geometry && o.geometry.dispose());
         ghosts.delete(id);
       }
-      const rec = records.get(id);
-      if (!rec || !pose) {
+      const i = index.get(id);
+      if (i === undefined || !pose) {
         requestRender();
         return;
       }
-      if (!rec.local) {
+      if (!locals.has(id)) {
         // hub corners in the hub tile's own frame
-        const m = tilePose(rec.unit.hub);
+        const m = tilePose(units[i].hub);
         if (!m) return;
         const inv = m.clone().invert();
-        rec.local = rec.unit.hub.map((p) => v3(p).applyMatrix4(inv));
+        locals.set(id, units[i].hub.map((p) => v3(p).applyMatrix4(inv)));
       }
       const g = new THREE.Group();
-      const pts = rec.local.map((p) => p.clone());
+      const pts = locals.get(id).map((p) => p.clone());
       const fill = new THREE.Mesh(quadGeometry(pts.map((p) => [p.x, p.y, p.z])),
         new THREE.MeshBasicMaterial({
           color: GHOST, transparent: true, opacity: 0.35, side: THREE.DoubleSide, depthWrite: false,
@@ -298,6 +372,23 @@ export function createFrameView(container, { units = [], background = '#101317' 
 
     onPick(cb) {
       if (typeof cb === 'function') pickCallbacks.push(cb);
+    },
+
+    unitAt,
+
+    project(id) {
+      const i = index.get(id);
+      if (i === undefined) return null;
+      const c = units[i].hub.map(v3).reduce((s, p) => s.add(p), new THREE.Vector3()).multiplyScalar(0.25);
+      camera.updateMatrixWorld();
+      c.project(camera);
+      const r = renderer.domElement.getBoundingClientRect();
+      return { x: r.left + (c.x + 1) / 2 * r.width, y: r.top + (1 - c.y) / 2 * r.height };
+    },
+
+    resetCamera() {
+      resetCamera();
+      requestRender();
     },
 
     render: requestRender,
