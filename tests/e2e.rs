@@ -19,6 +19,8 @@ mod cli;
 mod hygiene;
 #[path = "e2e/nest.rs"]
 mod nest;
+#[path = "e2e/report.rs"]
+mod report;
 #[path = "e2e/serve.rs"]
 mod serve;
 #[path = "e2e/solve.rs"]

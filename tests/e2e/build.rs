@@ -1,21 +1,35 @@
 //! `spinvalence build`: target surface to deployed frame, its config file and bad input.
 
-use crate::util::{num, read_json, Dir};
+use std::sync::OnceLock;
 
-const FILES: [&str; 7] = [
+use crate::util::{num, read_json, Dir, Output};
+
+const FILES: [&str; 9] = [
+    "bom.csv",
     "frame.json",
     "frame.obj",
     "mesh.obj",
+    "report.html",
     "report.json",
     "strips",
     "strips.json",
     "timings.json",
 ];
 
+/// `spinvalence build` with every default (the pavilion into `./out`), run once per test
+/// run in `target/tmp/e2e-default-build` and shared by the tests that read its output.
+pub fn default_build() -> &'static (Dir, Output) {
+    static BUILD: OnceLock<(Dir, Output)> = OnceLock::new();
+    BUILD.get_or_init(|| {
+        let dir = Dir::persistent("e2e-default-build");
+        let out = dir.run(&["build"]);
+        (dir, out)
+    })
+}
+
 #[test]
 fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
-    let dir = Dir::new();
-    let out = dir.run(&["build"]);
+    let (dir, out) = default_build();
     out.expect_code(0);
     assert_eq!(dir.entries("out"), FILES.to_vec(), "{out:?}");
     for row in [
@@ -28,11 +42,15 @@ fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
         "hub overlap",
         "time secondary / primary",
         "strips",
+        "steel",
+        "cut length / pierces",
+        "welds",
+        "report",
     ] {
         assert!(out.stdout.contains(row), "summary lacks {row}:{out:?}");
     }
     let timings = read_json(&dir.join("out/timings.json"));
-    for stage in ["secondary", "primary", "strips", "total"] {
+    for stage in ["secondary", "primary", "strips", "report", "total"] {
         let t = num(&timings[stage], stage);
         assert!(t > 0.0 && t.is_finite(), "{stage}: {t}");
     }
@@ -57,7 +75,7 @@ fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
     ])
     .expect_code(0);
     dir.run(&["check", "out/frame.json"]).expect_code(0);
-    check_strips(&dir, "out");
+    check_strips(dir, "out");
 }
 
 fn point(v: &serde_json::Value, what: &str) -> Vec<f64> {

@@ -5,27 +5,42 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// A fresh temporary working directory, removed on drop.
+/// A fresh working directory: temporary (removed on drop), or kept under the target
+/// directory for output that several tests of one run share.
 pub struct Dir {
-    tmp: tempfile::TempDir,
+    _tmp: Option<tempfile::TempDir>,
+    path: PathBuf,
 }
 
 impl Dir {
     pub fn new() -> Self {
+        let tmp = tempfile::Builder::new()
+            .prefix("spinvalence-e2e-")
+            .tempdir()
+            .expect("temporary directory");
         Self {
-            tmp: tempfile::Builder::new()
-                .prefix("spinvalence-e2e-")
-                .tempdir()
-                .expect("temporary directory"),
+            path: tmp.path().to_path_buf(),
+            _tmp: Some(tmp),
         }
     }
 
+    /// `target/tmp/NAME` (`CARGO_TARGET_TMPDIR`), emptied first and kept after the run
+    /// (for a test to share with others, and for a developer to look at).
+    pub fn persistent(name: &str) -> Self {
+        let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+        if path.exists() {
+            fs::remove_dir_all(&path).expect("empty the shared directory");
+        }
+        fs::create_dir_all(&path).expect("shared directory");
+        Self { _tmp: None, path }
+    }
+
     pub fn path(&self) -> &Path {
-        self.tmp.path()
+        &self.path
     }
 
     pub fn join(&self, name: &str) -> PathBuf {
-        self.tmp.path().join(name)
+        self.path.join(name)
     }
 
     /// Write a file (parents created) and return its path.

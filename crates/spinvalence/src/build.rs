@@ -13,13 +13,15 @@ use crate::cli::BuildArgs;
 use crate::config::{self, BuildConfig};
 use crate::output::{self, number, AtomicDir, AtomicFiles};
 use crate::solve::{progress_bar, seconds};
-use crate::strips;
+use crate::{report, strips};
 
 /// The files `build` writes beside `strips/`; `frame.json` last.
-const FILES: [&str; 6] = [
+const FILES: [&str; 8] = [
     "mesh.obj",
     "frame.obj",
     "strips.json",
+    "bom.csv",
+    "report.html",
     "timings.json",
     "report.json",
     "frame.json",
@@ -34,6 +36,8 @@ pub struct Timings {
     pub primary: f64,
     /// Strips: unrolling, cut profiles, design-rule check, DXF and SVG.
     pub strips: f64,
+    /// The report: report.html and bom.csv.
+    pub report: f64,
     /// The whole command, reading and writing included.
     pub total: f64,
 }
@@ -132,6 +136,10 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     }
     let strips_s = t2.elapsed().as_secs_f64();
 
+    let t3 = Instant::now();
+    let report_stage = report::run(&cfg.target, &frame, &stage.file, None, &report)?;
+    let report_s = t3.elapsed().as_secs_f64();
+
     let header = format!("spinvalence hub mesh of {}, mm, Z up", cfg.target);
     let mesh_obj = sv_io::write_quad_obj(&mesh, &header);
     let frame_obj = sv_io::frame_to_obj(&frame);
@@ -141,6 +149,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         secondary: secondary_s,
         primary: primary_s,
         strips: strips_s,
+        report: report_s,
         total: started.elapsed().as_secs_f64(),
     };
     let timings_json = serde_json::to_string_pretty(&timings)?;
@@ -149,6 +158,8 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         &mesh_obj,
         &frame_obj,
         &strips_json,
+        &report_stage.bom,
+        &report_stage.html,
         &timings_json,
         &report_json,
         &frame_json,
@@ -175,6 +186,14 @@ pub fn run(args: &BuildArgs) -> Result<()> {
                 ),
             ],
         );
+        let report_path = cfg.out.join("report.html").display().to_string();
+        let at = rows.len() - 2;
+        for (k, row) in report::summary_rows(&report_stage, &report_path)
+            .into_iter()
+            .enumerate()
+        {
+            rows.insert(at + k, row);
+        }
         rows.push(vec![
             "wrote".into(),
             written
@@ -247,10 +266,10 @@ fn summary_rows(
             format!("{} .. {}", mm(overlap.0), mm(overlap.1)),
         ],
         [
-            "time secondary / primary / strips".into(),
+            "time secondary / primary / strips / report".into(),
             format!(
-                "{:.3} s / {:.3} s / {:.3} s",
-                t.secondary, t.primary, t.strips
+                "{:.3} s / {:.3} s / {:.3} s / {:.3} s",
+                t.secondary, t.primary, t.strips, t.report
             ),
         ],
         [

@@ -10,6 +10,7 @@ mod cli;
 mod config;
 mod nest;
 mod output;
+mod report;
 mod serve;
 mod solve;
 mod strips;
