@@ -74,8 +74,9 @@ Examples:
 
 Built-in targets: builtin:flat, builtin:vault, builtin:dome, builtin:saddle, builtin:pavilion.
 Writes DIR/mesh.obj (hub mesh), frame.json, frame.obj, strips.json, strips/ (one DXF and one
-SVG per strip), report.json and timings.json, all or nothing. `spinvalence build --print-config`
-prints a config file with every default.";
+SVG per strip), report.html (the build report: open it in a browser, it needs no network),
+bom.csv (one row per strip), report.json and timings.json, all or nothing.
+`spinvalence build --print-config` prints a config file with every default.";
 
 const NEST_EXAMPLES: &str = "\
 Examples:

@@ -304,7 +304,7 @@ impl Page {
         let mut last_error = None;
         loop {
             match self.eval(js) {
-                Ok(v) if v == json!(true) => return Ok(()),
+                Ok(Value::Bool(true)) => return Ok(()),
                 Ok(_) => {}
                 Err(BrowserError::Script(e)) => last_error = Some(e),
                 Err(e) => return Err(e),

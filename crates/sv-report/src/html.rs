@@ -71,11 +71,11 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String, ReportError> {
     page.push_str(&sheets_section(input));
     page.push_str(&strips_section(input)?);
     page.push_str("</main>\n");
-    let _ = write!(
+    let _ = writeln!(
         page,
         "<footer>Made by {} from <code>frame.json</code>, <code>strips.json</code>{} beside this file; \
          the figures are defined in <code>docs/report.md</code>. This page needs no network: \
-         three.js r170 (MIT licence, &copy; three.js authors) is inside it.</footer>\n",
+         three.js r170 (MIT licence, &copy; three.js authors) is inside it.</footer>",
         escape(input.generator),
         if input.nest.is_some() {
             " and <code>nest.json</code>"
