@@ -289,6 +289,15 @@ fn every_summary_figure_is_recomputed_from_the_output_files() {
         "welds",
     ];
     if want.sheets.is_some() {
+        let nest = read_json(&dir.join("out/nest.json"));
+        let sheet_area: f64 = nest["sheets"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| num(&s["width"], "width") * num(&s["height"], "height"))
+            .sum();
+        let mass = sheet_area * 1e-6 * want.thickness * 1e-3 * 7850.0;
+        assert!(close(value("sheet_mass_kg"), mass, 1e-9));
         checked.push("sheet_mass_kg");
         checked.sort();
     }
@@ -411,6 +420,30 @@ fn bill_of_materials_has_one_row_per_strip() {
                 assert!((f(3) - num(&placement["translation"][0], "x")).abs() <= 0.005);
                 assert!((f(4) - num(&placement["translation"][1], "y")).abs() <= 0.005);
                 assert!((f(5) - num(&placement["rotation_deg"], "r")).abs() <= 0.0005);
+                // the placement maps the strip's own drawing into the sheet's margin
+                let sheet_json = &nest["sheets"][sheet - 1];
+                let (w, h) = (
+                    num(&sheet_json["width"], "w"),
+                    num(&sheet_json["height"], "h"),
+                );
+                let margin = num(&nest["sheet"]["margin"], "margin");
+                let (sin, cos) = num(&placement["rotation_deg"], "r").to_radians().sin_cos();
+                let t = [
+                    num(&placement["translation"][0], "x"),
+                    num(&placement["translation"][1], "y"),
+                ];
+                for v in strip["outline"].as_array().unwrap() {
+                    let (x, y) = (num(&v[0], "x"), num(&v[1], "y"));
+                    let p = [cos * x - sin * y + t[0], sin * x + cos * y + t[1]];
+                    let slack = 0.5;
+                    assert!(
+                        p[0] >= margin - slack
+                            && p[0] <= w - margin + slack
+                            && p[1] >= margin - slack
+                            && p[1] <= h - margin + slack,
+                        "{id}: outline vertex at {p:?} is off sheet {sheet} ({w} x {h}, margin {margin})"
+                    );
+                }
             }
         }
     }
@@ -497,6 +530,35 @@ fn report_opens_offline_in_chromium_and_shows_a_clicked_unit() {
     assert_eq!(n("map-theta"), units.len());
     assert_eq!(n("map-depth"), units.len());
     assert!(n("hist-conical") > 0);
+
+    // one picture per sheet, with its utilisation
+    let nest = dir.join("out/nest.json");
+    if nest.exists() {
+        let nest = read_json(&nest);
+        let sheets = nest["sheets"].as_array().unwrap();
+        let pictures = page
+            .eval("[...document.querySelectorAll('svg.sheet')].map((s) => [s.dataset.parts, s.closest('figure').textContent])")
+            .unwrap();
+        let pictures = pictures.as_array().unwrap();
+        assert_eq!(pictures.len(), sheets.len());
+        for (p, s) in pictures.iter().zip(sheets) {
+            let parts = s["placements"].as_array().unwrap().len();
+            assert_eq!(p[0], parts.to_string());
+            let u = format!("utilisation {:.1} %", 100.0 * num(&s["utilisation"], "u"));
+            assert!(p[1].as_str().unwrap().contains(&u), "{p:?}: {u}");
+        }
+    } else {
+        assert_eq!(
+            page.eval("document.querySelectorAll('svg.sheet').length")
+                .unwrap(),
+            0
+        );
+        assert!(
+            page.eval("document.getElementById('no-nesting') !== null")
+                .unwrap()
+                == true
+        );
+    }
 
     // click a unit in the middle of the frame, hubs only so that nothing is in front
     page.eval("document.querySelector('input[data-layer=\"primaries\"]').click()")

@@ -259,9 +259,13 @@ impl Page {
         if let Some(s) = &self.session {
             msg["sessionId"] = json!(s);
         }
-        self.ws
-            .send(Message::text(msg.to_string()))
-            .map_err(|e| BrowserError::Protocol(format!("{method}: {e}")))?;
+        let mut sent = self.ws.send(Message::text(msg.to_string()));
+        // a signal interrupted the write: the frame is queued, flush it again
+        while matches!(&sent, Err(tungstenite::Error::Io(e)) if e.kind() == std::io::ErrorKind::Interrupted)
+        {
+            sent = self.ws.flush();
+        }
+        sent.map_err(|e| BrowserError::Protocol(format!("{method}: {e}")))?;
         let deadline = Instant::now() + self.timeout;
         loop {
             let Some(v) = self.next_message(deadline)? else {
@@ -413,6 +417,10 @@ impl Page {
                 .map_err(|e| BrowserError::Protocol(e.to_string()))?;
             let msg = match self.ws.read() {
                 Ok(m) => m,
+                // a signal (another test's child exiting) interrupted the read: read again
+                Err(tungstenite::Error::Io(e)) if e.kind() == std::io::ErrorKind::Interrupted => {
+                    continue
+                }
                 Err(tungstenite::Error::Io(e))
                     if matches!(
                         e.kind(),
