@@ -442,10 +442,12 @@ fn sheets_section(input: &ReportInput<'_>) -> String {
     for (i, sheet) in r.sheets.iter().enumerate() {
         let _ = writeln!(
             h,
-            "<figure>{}<figcaption>Sheet {} (<code>{}</code>): {} x {} mm, {} strips, utilisation {:.1} %</figcaption></figure>",
+            "<figure>{}<figcaption>Sheet {}{}: {} x {} mm, {} strips, utilisation {:.1} %</figcaption></figure>",
             sheet_svg(input, sheet, i),
             i + 1,
-            escape(&input.sheet_name(i + 1)),
+            nest.sheet_files
+                .get(i)
+                .map_or(String::new(), |f| format!(" (<code>{}</code>)", escape(f))),
             sheet.width,
             sheet.height,
             sheet.placements.len(),
