@@ -2,10 +2,11 @@
 // deployment page (`spinvalence serve`) and the build report (`DIR/report.html`), which
 // embeds this file (crate sv-viewer).
 //
-//   const view = createFrameView(container, { units, background, expansion });
+//   const view = createFrameView(container, { units, background, expansion, highlight });
 //   units: [{ id, strip, hub: [[x, y, z] x 4], primary: [[x, y, z] x 4] }]  (mm, Z up;
 //          frame.json order: leg i joins hub corner i to primary corner i + 1)
 //   expansion: primary tiles drawn scaled by e about their centroids (fig. 11), default 1
+//   highlight: css colour of the outline of the highlighted unit (default yellow)
 //   view.setColours(fnOrMap)          per-unit css colour: fn(id) -> colour, or Map / object
 //   view.setLayers({hubs, primaries, legs})  show or hide each layer (booleans)
 //   view.highlight(id | null)         outline one unit
@@ -108,7 +109,9 @@ function edges(q) {
   return [0, 1, 2, 3].map((i) => [q[i], q[(i + 1) % 4]]);
 }
 
-export function createFrameView(container, { units = [], background = '#101317', expansion = 1 } = {}) {
+export function createFrameView(container, {
+  units = [], background = '#101317', expansion = 1, highlight = HIGHLIGHT,
+} = {}) {
   const renderer = new THREE.WebGLRenderer({ antialias: true, alpha: true });
   renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
   container.append(renderer.domElement);
@@ -177,7 +180,7 @@ export function createFrameView(container, { units = [], background = '#101317',
   resetCamera();
 
   // highlight, ghost, marker
-  const highlightMat = new THREE.LineBasicMaterial({ color: HIGHLIGHT, depthTest: false });
+  const highlightMat = new THREE.LineBasicMaterial({ color: highlight, depthTest: false });
   let highlighted = null;
   const ghostGroup = new THREE.Group();
   scene.add(ghostGroup);

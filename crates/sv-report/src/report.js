@@ -79,6 +79,7 @@ function legend(m) {
       const chip = document.createElement('span');
       chip.className = 'chip';
       chip.style.background = stripColour(s);
+      chip.style.color = stripIndex.get(s) % 2 ? '#fff' : '#111';
       chip.textContent = s || '(none)';
       p.append(chip);
     }
@@ -187,7 +188,7 @@ function start() {
   const container = $('view');
   try {
     view = createFrameView(container, {
-      units, background: data.background, expansion: data.expansion,
+      units, background: data.background, expansion: data.expansion, highlight: '#ff3dd4',
     });
   } catch (e) {
     const p = document.createElement('p');
