@@ -1,6 +1,10 @@
 //! Guided projection (Tang et al. 2014): Gauss-Newton on quadratic constraints with
-//! auxiliary unit face normals and cone axes, solved through the normal equations with
-//! a sparse Cholesky factorisation whose symbolic part is reused every iteration.
+//! auxiliary unit face normals, solved through the normal equations with a sparse Cholesky
+//! factorisation whose symbolic part is reused every iteration. The hard goals (planarity,
+//! conical vertices) gain weight while they are unmet and the mesh still follows the
+//! target; barriers keep edges from collapsing and corners from folding, and a step that
+//! would fold the mesh anyway is cut or, failing that, ends the run on the last unfolded
+//! iterate with the place named in the report.
 
 use sv_frame::QuadMesh;
 use sv_geom::{quad_diagonal_distance, Point3, Real, Vector3};
@@ -15,6 +19,8 @@ use crate::{SecondaryOptions, SurfaceError, TargetMesh};
 const COLLAPSE_FRACTION: Real = 0.2;
 /// Largest factor by which the planarity and conical weights grow during the run.
 const HARD_GAIN_MAX: Real = 100.0;
+/// Smallest factor they shrink to where the goals conflict with closeness.
+const HARD_GAIN_MIN: Real = 0.1;
 /// Growth of the hard-goal gain per iteration while planarity or conicality is unmet.
 const HARD_GAIN_STEP: Real = 1.090_507_732_665_257_7; // 2^(1/8)
 /// Stop once the hard goals hold and every vertex is within this fraction of the
@@ -463,7 +469,7 @@ pub(crate) fn optimise_indexed(
         // the target; where they cannot be met without leaving it (the goals conflict)
         // it backs off, so the result stays on the target and `unmet` names the faces
         if far > opts.closeness_tolerance {
-            hard = (hard / HARD_GAIN_STEP).max(1.0);
+            hard = (hard / HARD_GAIN_STEP).max(HARD_GAIN_MIN);
         } else if !hard_met {
             hard = (hard * HARD_GAIN_STEP).min(HARD_GAIN_MAX);
         }
@@ -477,7 +483,7 @@ pub(crate) fn optimise_indexed(
         // stalled: tiny steps while the hard weights no longer grow
         let stalled = step * max_move < 1e-3
             && max_move <= opts.max_step
-            && (hard_met || hard >= HARD_GAIN_MAX || hard <= 1.0);
+            && (hard_met || hard >= HARD_GAIN_MAX || hard <= HARD_GAIN_MIN);
         if it >= 5 && ((hard_met && soft_met) || stalled) {
             break;
         }
