@@ -210,6 +210,8 @@ pub(crate) fn initial_grid_indexed(
         }
         best.1
     };
+    let smooth = corners.map(|c| turning[c] < SMOOTH_CORNER_TURN);
+    let open = nx >= 4 && ny >= 4 && smooth.iter().any(|&s| s);
     let failure = std::cell::Cell::new(None);
     let mesh = QuadMesh::from_fn(nx, ny, |i, j| {
         let (fu, fv) = (i as Real / nx as Real, j as Real / ny as Real);
@@ -238,7 +240,79 @@ pub(crate) fn initial_grid_indexed(
             "grid point ({i}, {j}) is outside the parametrised target"
         )));
     }
+    // a grid corner where the boundary hardly turns would get a face corner near 180
+    // degrees: open it into two faces meeting at an interior valence-3 vertex
+    if open {
+        return Ok(open_smooth_corners(&mesh, nx, ny, smooth));
+    }
     Ok(mesh)
+}
+
+/// Boundary turning (radians, over 0.75 unit either side) below which a grid corner is
+/// opened by [`open_smooth_corners`]: sharp corners of the targets turn by 73-100 degrees,
+/// smooth boundaries by under 10.
+const SMOOTH_CORNER_TURN: Real = std::f64::consts::FRAC_PI_4;
+
+/// Replace the corner face of an `nx` x `ny` grid (built by `QuadMesh::from_fn`) and its two
+/// neighbours along the boundary by two faces that share the corner vertex, at every corner
+/// flagged in `smooth` (SW, SE, NE, NW). The corner vertex then has two faces, like any
+/// boundary vertex, and the grid vertex diagonally inside it three (an irregular vertex):
+/// in the conformal map a grid corner's 90 degrees open to the 180 degrees of a smooth
+/// boundary, two faces of about 90 degrees each. Needs `nx, ny >= 4`.
+fn open_smooth_corners(grid: &QuadMesh, nx: usize, ny: usize, smooth: [bool; 4]) -> QuadMesh {
+    let id = |i: usize, j: usize| j * (nx + 1) + i;
+    let cell = |i: usize, j: usize| j * nx + i;
+    let mut drop_face = vec![false; grid.faces.len()];
+    let mut drop_vertex = vec![false; grid.vertices.len()];
+    let mut extra = Vec::new();
+    let at = |c: usize, k: isize| {
+        if c == 0 {
+            k as usize
+        } else {
+            (c as isize - k) as usize
+        }
+    };
+    for (k, (ci, cj)) in [(0, 0), (nx, 0), (nx, ny), (0, ny)].into_iter().enumerate() {
+        if !smooth[k] {
+            continue;
+        }
+        // lattice points at steps (a, b) inward from the corner
+        let p = |a: isize, b: isize| id(at(ci, a), at(cj, b));
+        let f =
+            |a: isize, b: isize| cell(at(ci, a).min(at(ci, a + 1)), at(cj, b).min(at(cj, b + 1)));
+        for (a, b) in [(0, 0), (1, 0), (0, 1)] {
+            drop_face[f(a, b)] = true;
+        }
+        drop_vertex[p(1, 0)] = true;
+        drop_vertex[p(0, 1)] = true;
+        let mut f1 = [p(0, 0), p(2, 0), p(2, 1), p(1, 1)];
+        let mut f2 = [p(0, 2), p(0, 0), p(1, 1), p(1, 2)];
+        // mirrored corners (SE, NW) reverse the cyclic order
+        if k % 2 == 1 {
+            f1.reverse();
+            f2.reverse();
+        }
+        extra.push(f1);
+        extra.push(f2);
+    }
+    let mut index = vec![usize::MAX; grid.vertices.len()];
+    let mut vertices = Vec::with_capacity(grid.vertices.len());
+    for (v, p) in grid.vertices.iter().enumerate() {
+        if !drop_vertex[v] {
+            index[v] = vertices.len();
+            vertices.push(*p);
+        }
+    }
+    let faces = grid
+        .faces
+        .iter()
+        .zip(&drop_face)
+        .filter(|(_, &d)| !d)
+        .map(|(f, _)| *f)
+        .chain(extra)
+        .map(|f| f.map(|v| index[v]))
+        .collect();
+    QuadMesh { vertices, faces }
 }
 
 /// Conformal coordinates of a patch with four marked sides.
@@ -526,5 +600,90 @@ mod tests {
             (first / last - 1.0).abs() > 0.5,
             "corner faces {first} and {last} mm"
         );
+    }
+
+    /// Ellipse with semi-axes `a`, `b` (a square grid squeezed onto the disc) on the
+    /// paraboloid of revolution `z = -(x^2 + y^2) / (2 radius)` (flat when `radius` is 0).
+    fn oval(n: usize, a: Real, b: Real, radius: Real) -> TargetMesh {
+        let mut m = TargetMesh::default();
+        for j in 0..=n {
+            for i in 0..=n {
+                let s = 2.0 * i as Real / n as Real - 1.0;
+                let t = 2.0 * j as Real / n as Real - 1.0;
+                let (x, y) = (
+                    a * s * (1.0 - t * t / 2.0).sqrt(),
+                    b * t * (1.0 - s * s / 2.0).sqrt(),
+                );
+                let z = if radius > 0.0 {
+                    -(x * x + y * y) / (2.0 * radius)
+                } else {
+                    0.0
+                };
+                m.vertices.push(Point3::new(x, y, z));
+            }
+        }
+        let id = |i: usize, j: usize| j * (n + 1) + i;
+        for j in 0..n {
+            for i in 0..n {
+                m.triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                m.triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn smooth_boundary_gets_opened_corners() {
+        let mesh = oval(48, 2200.0, 1600.0, 0.0);
+        let opts = SecondaryOptions {
+            unit_size: 300.0,
+            ..Default::default()
+        };
+        let grid = initial_grid(&mesh, &opts).unwrap();
+        let mut faces_at = vec![0usize; grid.vertices.len()];
+        for f in &grid.faces {
+            for &v in f {
+                faces_at[v] += 1;
+            }
+        }
+        // no grid corner with a single face; four interior vertices of valence 3
+        assert!(faces_at.iter().all(|&c| c >= 2), "{faces_at:?}");
+        let topo = crate::topology::Topology::new(&grid).unwrap();
+        let irregular = (0..grid.vertices.len())
+            .filter(|&v| !topo.boundary[v] && faces_at[v] == 3)
+            .count();
+        assert_eq!(irregular, 4);
+        assert!((0..grid.vertices.len()).all(|v| !topo.corner[v]));
+        // every face convex and counter-clockwise seen from +Z
+        for f in 0..grid.faces.len() {
+            let p = grid.face_points(f);
+            for k in 0..4 {
+                let turn = (p[(k + 1) % 4] - p[k]).cross(&(p[(k + 2) % 4] - p[(k + 1) % 4]));
+                assert!(turn.z > 0.0, "face {f} corner {}", (k + 1) % 4);
+            }
+        }
+        // a rectangle keeps its four single-face corners
+        let (sector_mesh, _) = sector(48, 1000.0, 2500.0, 1.2);
+        let grid = initial_grid(&sector_mesh, &opts).unwrap();
+        let topo = crate::topology::Topology::new(&grid).unwrap();
+        assert_eq!(topo.corner.iter().filter(|&&c| c).count(), 4);
+    }
+
+    #[test]
+    fn oval_dome_is_planar_and_conical_at_300() {
+        // smooth boundary on a dome of revolution: the opened corners keep every face
+        // planar and every vertex conical; the faces next to them stay small (edge ratio,
+        // docs/secondary.md)
+        let target = oval(48, 2200.0, 1600.0, 4500.0);
+        let opts = SecondaryOptions {
+            unit_size: 300.0,
+            ..Default::default()
+        };
+        let (_, r) = crate::build_secondary(&target, &opts, &mut |_, _| {}).unwrap();
+        assert!(r.planarity_max <= 0.002, "{r:?}");
+        assert!(r.conical_max_deg <= 0.5, "{r:?}");
+        assert!(r.closeness_max <= 0.05, "{r:?}");
+        assert!(r.boundary_max <= 0.05, "{r:?}");
+        assert!(r.non_convex_faces.is_empty(), "{r:?}");
     }
 }
