@@ -8,6 +8,19 @@
 //! | `hypar_pentagon.obj` | hyperbolic paraboloid z = xy / 4000 | negative | pentagon: a square with a gable on top |
 //! | `wavy_mixed.obj` | z = 250 sin(2 pi x / 3000) cos(2 pi y / 2800) + arch | mixed | organic, wobbly sides |
 //!
+//! The last three do not meet every goal, and no hub mesh whose boundary follows theirs can
+//! (docs/secondary.md, "Targets that cannot meet every goal"): planar faces with conical
+//! vertices follow the principal curvature lines, and these boundaries cut across them
+//! (the hypar's straight sides are its asymptotic lines). The next three have
+//! non-rectangular plans whose sides are curvature lines (sectors of surfaces of
+//! revolution bounded by two meridians and two parallels) and meet every goal:
+//!
+//! | file | surface | Gaussian curvature | boundary |
+//! |---|---|---|---|
+//! | `cone_sector.obj` | cone, slope 19 degrees | zero | annular sector, radii 1.8-4.2 m, 69 degrees |
+//! | `trumpet_sector.obj` | z = 1400 ln(r / 1300) | negative | annular sector, radii 1.3-3.9 m, 74 degrees |
+//! | `bell_sector.obj` | z = 1700 exp(-(r / 4000)^2) | mixed (sign changes at r = 2.83 m) | annular sector, radii 1.9-3.9 m, 92 degrees |
+//!
 //! Each is a curvilinear quadrilateral patch `(s, t) in [-1, 1]^2 -> (x, y)` sampled on a
 //! 56 x 56 grid (about 70 mm triangles), written with one decimal (< 300 KB per file).
 
@@ -47,6 +60,27 @@ fn wavy(s: f64, t: f64) -> (f64, f64, f64) {
     (x, y, z)
 }
 
+/// Point at radius `r`, polar angle `phi` from the Y axis, of a surface of revolution with
+/// profile `height(r)`, its axis at `(0, -centre)`.
+fn revolution(r: f64, phi: f64, centre: f64, height: f64) -> (f64, f64, f64) {
+    (r * phi.sin(), r * phi.cos() - centre, height)
+}
+
+fn cone(s: f64, t: f64) -> (f64, f64, f64) {
+    let r = 3000.0 + 1200.0 * t;
+    revolution(r, 0.6 * s, 3000.0, 1800.0 * (1.0 - r / 5200.0))
+}
+
+fn trumpet(s: f64, t: f64) -> (f64, f64, f64) {
+    let r = 2600.0 + 1300.0 * t;
+    revolution(r, 0.65 * s, 2600.0, 1400.0 * (r / 1300.0).ln())
+}
+
+fn bell(s: f64, t: f64) -> (f64, f64, f64) {
+    let r = 2900.0 + 1000.0 * t;
+    revolution(r, 0.8 * s, 2900.0, 1700.0 * (-(r / 4000.0).powi(2)).exp())
+}
+
 fn obj(name: &str, map: Map) -> String {
     let mut out = format!("# spinvalence acceptance target {name}, mm, Z up\n");
     for j in 0..=N {
@@ -76,11 +110,14 @@ fn main() {
         .nth(1)
         .unwrap_or_else(|| "fixtures/targets".into());
     std::fs::create_dir_all(&dir).expect("create output directory");
-    let targets: [(&str, Map); 4] = [
+    let targets: [(&str, Map); 7] = [
         ("dome_lens", dome),
         ("cylinder_wave", cylinder),
         ("hypar_pentagon", hypar),
         ("wavy_mixed", wavy),
+        ("cone_sector", cone),
+        ("trumpet_sector", trumpet),
+        ("bell_sector", bell),
     ];
     for (name, map) in targets {
         let path = format!("{dir}/{name}.obj");

@@ -2,11 +2,11 @@
 //!
 //! | name | shape | Gaussian curvature | footprint |
 //! |---|---|---|---|
-//! | `flat` | plane z = 0 | zero | rounded rectangle 4.4 x 3.2 m |
-//! | `vault` | barrel vault, radius 2.5 m, axis X | zero (single curved) | rounded rectangle 5 x 3.6 m |
-//! | `dome` | sphere cap, radius 4 m | positive | rounded square 4 x 4 m |
-//! | `saddle` | z = (x^2 - y^2) / 7000 | negative | rounded square 4 x 4 m |
-//! | `pavilion` | freeform shell arched along X, waved across Y | mixed (sign changes at abs(y) = 1.1 m) | organic rounded, 6 x 4 m |
+//! | `flat` | plane z = 0 | zero | rectangle 4.4 x 3.2 m |
+//! | `vault` | barrel vault, radius 2.5 m, axis X | zero (single curved) | rectangle 5 x 3.6 m |
+//! | `dome` | sphere cap, radius 4 m | positive | square 4 x 4 m |
+//! | `saddle` | z = (x^2 - y^2) / 7000 | negative | square 4 x 4 m |
+//! | `pavilion` | freeform shell arched along X, waved across Y | mixed (sign changes at abs(y) = 1.1 m) | rectangle with bulging sides, 6 x 4 m |
 
 use sv_geom::{Point3, Real};
 
@@ -15,12 +15,13 @@ use crate::{SurfaceError, TargetMesh};
 /// Names accepted by [`builtin_target`].
 pub const BUILTIN_NAMES: [&str; 5] = ["flat", "vault", "dome", "saddle", "pavilion"];
 
-/// Superellipse exponent of the built-in footprints: 40 gives a rectangle whose corners
-/// are rounded over about 2 % of the half-width (40 mm on a 2 m half-width), so the
-/// boundary turns by nearly 90 degrees within one unit at every unit size down to
-/// 100 mm and the hub grid's four corners sit there (a grid corner on a smooth arc
-/// has a face angle near 180 degrees, which no rhombic hub fits).
-const FOOTPRINT_EXPONENT: Real = 40.0;
+/// Superellipse exponent of the built-in footprints: 400 gives a rectangle whose corners
+/// are rounded over about 0.2 % of the half-width (under 4 mm on a 2 m half-width), so
+/// the boundary turns by 90 degrees at a point and the hub grid's corner faces can be
+/// rhombi. (Exponent 40, rounding over 2 % or 35 mm, put the grid corner on a chamfer:
+/// corner faces were kites with a 145 degree corner at 150 mm units, their rhombus fit
+/// 15-19 mm, and the worst link gaps of every built-in sat next to them.)
+const FOOTPRINT_EXPONENT: Real = 400.0;
 
 /// Default built-in target (the embedded default of `spinvalence build`).
 pub const DEFAULT_BUILTIN: &str = "pavilion";

@@ -5,8 +5,9 @@
 //! Core items:
 //! - [`TargetMesh`]: the design surface (triangles, mm, Z up), [`TargetMesh::validate`];
 //! - [`builtin_target`]: `flat`, `vault`, `dome`, `saddle`, `pavilion` (the default);
-//! - [`initial_grid`]: a quad grid at the unit size whose outer ring follows the boundary;
-//! - [`optimise`]: guided projection (Gauss-Newton with auxiliary normals and cone axes);
+//! - [`initial_grid`]: a quad grid at the unit size whose outer ring follows the boundary
+//!   and whose lattice follows the conformal map of the target onto a rectangle;
+//! - [`optimise`]: guided projection (Gauss-Newton with auxiliary face normals);
 //! - [`build_secondary`]: both in one call, returning the mesh and a [`SecondaryReport`].
 //!
 //! ```

@@ -1,6 +1,10 @@
 //! Guided projection (Tang et al. 2014): Gauss-Newton on quadratic constraints with
-//! auxiliary unit face normals and cone axes, solved through the normal equations with
-//! a sparse Cholesky factorisation whose symbolic part is reused every iteration.
+//! auxiliary unit face normals, solved through the normal equations with a sparse Cholesky
+//! factorisation whose symbolic part is reused every iteration. The hard goals (planarity,
+//! conical vertices) gain weight while they are unmet and the mesh still follows the
+//! target; barriers keep edges from collapsing and corners from folding, and a step that
+//! would fold the mesh anyway is cut or, failing that, ends the run on the last unfolded
+//! iterate with the place named in the report.
 
 use sv_frame::QuadMesh;
 use sv_geom::{quad_diagonal_distance, Point3, Real, Vector3};
@@ -15,14 +19,32 @@ use crate::{SecondaryOptions, SurfaceError, TargetMesh};
 const COLLAPSE_FRACTION: Real = 0.2;
 /// Largest factor by which the planarity and conical weights grow during the run.
 const HARD_GAIN_MAX: Real = 100.0;
+/// Smallest factor they shrink to where the goals conflict with closeness.
+const HARD_GAIN_MIN: Real = 0.1;
+/// Growth of the hard-goal gain per iteration while planarity or conicality is unmet.
+const HARD_GAIN_STEP: Real = 1.090_507_732_665_257_7; // 2^(1/8)
+/// Stop once the hard goals hold and every vertex is within this fraction of the
+/// closeness tolerance (margin for the final measurement).
+const STOP_CLOSENESS: Real = 0.6;
+/// Edge length (fraction of the initial mean edge) below which the edge barrier acts.
+const EDGE_MIN: Real = 0.5;
+/// Sine of the corner angle below which the corner barrier acts (about 20 and 160 deg).
+const SINE_MIN: Real = 0.34;
+/// Weight of the barriers relative to the hard goals.
+const BARRIER_WEIGHT: Real = 3.0;
 
 /// Normal equations `(J^T W J + eps I) dx = -J^T W r` assembled row by row in a fixed order.
+/// The first iteration records the pattern; later ones scatter each product straight to
+/// its compressed position (rows with weight 0 are skipped in O(1)).
 struct System {
     n: usize,
+    first: bool,
     pattern: Vec<(usize, usize)>,
+    first_values: Vec<Real>,
+    pos: Vec<u32>,
+    cursor: usize,
     values: Vec<Real>,
     rhs: Vec<Real>,
-    first: bool,
     energy: Real,
 }
 
@@ -30,40 +52,65 @@ impl System {
     fn new(n: usize) -> Self {
         Self {
             n,
+            first: true,
             pattern: Vec::new(),
+            first_values: Vec::new(),
+            pos: Vec::new(),
+            cursor: 0,
             values: Vec::new(),
             rhs: vec![0.0; n],
-            first: true,
             energy: 0.0,
         }
     }
 
     fn reset(&mut self, regulariser: Real) {
-        self.values.clear();
+        self.values.iter_mut().for_each(|v| *v = 0.0);
         self.rhs.iter_mut().for_each(|r| *r = 0.0);
         self.energy = 0.0;
+        self.cursor = 0;
         for i in 0..self.n {
-            if self.first {
-                self.pattern.push((i, i));
-            }
-            self.values.push(regulariser);
+            self.entry(i, i, regulariser);
+        }
+    }
+
+    #[inline]
+    fn entry(&mut self, a: usize, b: usize, v: Real) {
+        if self.first {
+            self.pattern.push((a.min(b), a.max(b)));
+            self.first_values.push(v);
+        } else {
+            self.values[self.pos[self.cursor] as usize] += v;
+            self.cursor += 1;
         }
     }
 
     /// One residual `r` with gradient `vals` over distinct columns `cols`, weight `w`.
     fn row(&mut self, cols: &[usize], vals: &[Real], r: Real, w: Real) {
+        let m = cols.len();
+        if w == 0.0 && !self.first {
+            self.cursor += m * (m + 1) / 2;
+            return;
+        }
         let w2 = w * w;
         self.energy += w2 * r * r;
-        for a in 0..cols.len() {
+        for a in 0..m {
             self.rhs[cols[a]] -= w2 * vals[a] * r;
-            for b in a..cols.len() {
-                if self.first {
-                    self.pattern
-                        .push((cols[a].min(cols[b]), cols[a].max(cols[b])));
-                }
-                self.values.push(w2 * vals[a] * vals[b]);
+            for b in a..m {
+                self.entry(cols[a], cols[b], w2 * vals[a] * vals[b]);
             }
         }
+    }
+
+    /// Analyse the recorded pattern (after the first assembly).
+    fn analyse(&mut self) -> Result<SpdSolver, SurfaceError> {
+        let mut solver = SpdSolver::new(self.n, &self.pattern)?;
+        solver.set_values(&self.first_values);
+        self.pos = solver.positions().to_vec();
+        self.values = solver.values_mut().to_vec();
+        self.first = false;
+        self.pattern = Vec::new();
+        self.first_values = Vec::new();
+        Ok(solver)
     }
 }
 
@@ -153,16 +200,20 @@ pub(crate) fn optimise_indexed(
     let mut system = System::new(n);
     let mut solver: Option<SpdSolver> = None;
     let mut iterations = 0;
+    let mut stopped: Option<String> = None;
+    let mut hints: Vec<Option<usize>> = vec![None; nv];
     let (mut cols, mut vals) = (Vec::with_capacity(16), Vec::with_capacity(16));
+    let mut dx = vec![0.0; n];
+    let mut hard: Real = 1.0;
     for it in 0..opts.max_iterations {
         iterations = it + 1;
         let decay = (0.5f64).powf(it as Real / 10.0).max(0.1);
         let w_fair = opts.fairness_weight * decay;
         let w_edge = opts.edge_weight;
-        // continuation: the hard goals (planarity, conicality) gain weight over time
-        let hard = (2.0f64).powf(it as Real / 8.0).min(HARD_GAIN_MAX);
+        // continuation: the hard goals (planarity, conicality) gain weight while unmet
         let w_plan = opts.planarity_weight * hard;
         let w_cone = opts.conical_weight * hard;
+        let w_bar = BARRIER_WEIGHT * hard;
         system.reset(opts.regulariser);
         // planarity
         for (f, face) in faces.iter().enumerate() {
@@ -223,7 +274,8 @@ pub(crate) fn optimise_indexed(
         let mut far = 0.0f64;
         for v in 0..nv {
             let p = to_world(&x, v);
-            let cp = index.closest(&p);
+            let cp = index.closest_near(&p, hints[v]);
+            hints[v] = Some(cp.triangle);
             let d = (p - cp.point) / scale;
             far = far.max(d.norm());
             cols.clear();
@@ -297,16 +349,66 @@ pub(crate) fn optimise_indexed(
             push3(&mut cols, &mut vals, 3 * face[1], &(d1 * 2.0));
             system.row(&cols, &vals, d0.norm_squared() - d1.norm_squared(), w_edge);
         }
+        // barriers, active only near a fold: short edges and corner angles near 0 or
+        // 180 degrees (sine of the corner angle about the face normal below SINE_MIN)
+        for (f, face) in faces.iter().enumerate() {
+            let p = face.map(|v| pos(&x, v));
+            let nrm = Vector3::new(x[nbase + 3 * f], x[nbase + 3 * f + 1], x[nbase + 3 * f + 2]);
+            for k in 0..4 {
+                let (i, j) = (face[k], face[(k + 1) % 4]);
+                let e = p[(k + 1) % 4] - p[k];
+                let len = e.norm();
+                let (r, w) = if len < EDGE_MIN && len > 0.0 {
+                    (EDGE_MIN - len, w_bar)
+                } else {
+                    (0.0, 0.0)
+                };
+                let u = if len > 0.0 { e / len } else { Vector3::zeros() };
+                cols.clear();
+                vals.clear();
+                push3(&mut cols, &mut vals, 3 * j, &(-u));
+                push3(&mut cols, &mut vals, 3 * i, &u);
+                system.row(&cols, &vals, r, w);
+                // corner k between the edges to k+1 and k-1
+                let (prev, next) = (face[(k + 3) % 4], face[(k + 1) % 4]);
+                let a = p[(k + 1) % 4] - p[k];
+                let b = p[(k + 3) % 4] - p[k];
+                let (la, lb) = (a.norm(), b.norm());
+                let s = if la > 0.0 && lb > 0.0 {
+                    a.cross(&b).dot(&nrm) / (la * lb)
+                } else {
+                    0.0
+                };
+                let (r, w) = if s < SINE_MIN && la > 0.0 && lb > 0.0 {
+                    (SINE_MIN - s, w_bar)
+                } else {
+                    (0.0, 0.0)
+                };
+                let (ga, gb) = if w > 0.0 {
+                    (
+                        -(b.cross(&nrm) / (la * lb) - a * (s / (la * la))),
+                        -(nrm.cross(&a) / (la * lb) - b * (s / (lb * lb))),
+                    )
+                } else {
+                    (Vector3::zeros(), Vector3::zeros())
+                };
+                cols.clear();
+                vals.clear();
+                push3(&mut cols, &mut vals, 3 * next, &ga);
+                push3(&mut cols, &mut vals, 3 * prev, &gb);
+                push3(&mut cols, &mut vals, 3 * face[k], &(-(ga + gb)));
+                system.row(&cols, &vals, r, w);
+            }
+        }
         if system.first {
-            solver = Some(SpdSolver::new(n, &system.pattern)?);
-            system.first = false;
-            system.pattern = Vec::new();
+            solver = Some(system.analyse()?);
         }
         let Some(solver) = solver.as_mut() else {
             return Err(SurfaceError::Internal("solver missing".into()));
         };
-        let mut dx = system.rhs.clone();
-        if !solver.solve(&system.values, &mut dx)? {
+        solver.values_mut().copy_from_slice(&system.values);
+        dx.copy_from_slice(&system.rhs);
+        if !solver.solve(&mut dx)? {
             return Err(SurfaceError::Internal(format!(
                 "normal equations not positive definite at iteration {it}"
             )));
@@ -318,6 +420,7 @@ pub(crate) fn optimise_indexed(
             1.0
         };
         let mut accepted = None;
+        let mut why = String::new();
         for _ in 0..6 {
             let mut trial: Vec<Real> = x.iter().zip(&dx).map(|(a, d)| a + step * d).collect();
             for f in 0..nf {
@@ -330,22 +433,18 @@ pub(crate) fn optimise_indexed(
                     accepted = Some(trial);
                     break;
                 }
-                Some(why) => {
-                    if step < 1e-3 {
-                        return Err(SurfaceError::Folded(format!("{why} at iteration {it}; the goals conflict there (try a different unit size or weights)")));
-                    }
-                    accepted = None;
+                Some(w) => {
+                    why = w;
                     step *= 0.3;
-                    if step < 1e-3 {
-                        return Err(SurfaceError::Folded(format!("{why} at iteration {it}; the goals conflict there (try a different unit size or weights)")));
-                    }
                 }
             }
         }
         let Some(trial) = accepted else {
-            return Err(SurfaceError::Folded(format!(
-                "no unfolded step found at iteration {it}"
-            )));
+            // the goals conflict here: keep the last unfolded iterate and say where
+            stopped = Some(format!(
+                "optimisation stopped at iteration {it}: any further step folds the mesh ({why}); the goals conflict there"
+            ));
+            break;
         };
         x = trial;
         progress(it, system.energy);
@@ -365,12 +464,27 @@ pub(crate) fn optimise_indexed(
             .into_iter()
             .fold(0.0, Real::max)
             .to_degrees();
-        if it >= 5
-            && plan <= opts.planarity_tolerance
-            && cone <= opts.conical_tolerance_deg
-            && far <= 0.5 * opts.closeness_tolerance
-            && step * max_move < 1e-3
-        {
+        let hard_met = plan <= opts.planarity_tolerance && cone <= opts.conical_tolerance_deg;
+        // the hard gain grows while the hard goals are unmet and the mesh still follows
+        // the target; where they cannot be met without leaving it (the goals conflict)
+        // it backs off, so the result stays on the target and `unmet` names the faces
+        if far > opts.closeness_tolerance {
+            hard = (hard / HARD_GAIN_STEP).max(HARD_GAIN_MIN);
+        } else if !hard_met {
+            hard = (hard * HARD_GAIN_STEP).min(HARD_GAIN_MAX);
+        }
+        let square = faces
+            .iter()
+            .filter(|f| edge_ratio(&f.map(|v| pos(&x, v))) <= crate::EDGE_RATIO_LIMIT)
+            .count() as Real
+            / nf as Real;
+        let soft_met = far <= STOP_CLOSENESS * opts.closeness_tolerance
+            && square >= Goals::default().edge_ratio_fraction;
+        // stalled: tiny steps while the hard weights no longer grow
+        let stalled = step * max_move < 1e-3
+            && max_move <= opts.max_step
+            && (hard_met || hard >= HARD_GAIN_MAX || hard <= HARD_GAIN_MIN);
+        if it >= 5 && ((hard_met && soft_met) || stalled) {
             break;
         }
     }
@@ -378,8 +492,23 @@ pub(crate) fn optimise_indexed(
         vertices: (0..nv).map(|v| to_world(&x, v)).collect(),
         faces,
     };
-    let report = measure(&mesh, &topo, index, iterations, &Goals::default());
+    let mut report = measure(&mesh, &topo, index, iterations, &Goals::default());
+    if let Some(s) = stopped {
+        report.unmet.push(s);
+    }
     Ok((mesh, report))
+}
+
+/// Longest over shortest edge of a quad.
+fn edge_ratio(p: &[Vector3; 4]) -> Real {
+    let e = [0, 1, 2, 3].map(|k| (p[(k + 1) % 4] - p[k]).norm());
+    let max = e.iter().copied().fold(0.0, Real::max);
+    let min = e.iter().copied().fold(Real::INFINITY, Real::min);
+    if min > 0.0 {
+        max / min
+    } else {
+        Real::INFINITY
+    }
 }
 
 /// A collapsed edge or a flipped face in the normalised positions, if any.

@@ -1,4 +1,4 @@
-//! Initial quad grid: the target is mapped harmonically onto a rectangle whose four
+//! Initial quad grid: the target is mapped conformally onto a rectangle whose four
 //! corners are boundary points chosen along the principal-curvature frame, and the
 //! integer lattice of that rectangle is lifted back to the target.
 
@@ -85,7 +85,8 @@ pub(crate) fn target_frame(mesh: &TargetMesh) -> Frame {
 
 /// The initial hub grid on `target` at `opts.unit_size`: a structured `nx` x `ny` quad
 /// grid whose outer ring lies on the target boundary (corners where the boundary is
-/// extreme along the frame diagonals) and whose interior follows a harmonic map.
+/// extreme along the frame diagonals and turns most) and whose lattice follows the
+/// conformal map of the patch onto a rectangle, so its faces start out square.
 pub fn initial_grid(
     target: &TargetMesh,
     opts: &SecondaryOptions,
@@ -154,12 +155,21 @@ pub(crate) fn initial_grid_indexed(
     if !ordered {
         corners = [0, m / 4, m / 2, 3 * m / 4].map(|k| (corners[0] + k) % m);
     }
-    let arc = |k: usize| index.boundary_arc[corners[k]];
-    let per = index.perimeter();
-    let side = |k: usize| (arc((k + 1) % 4) - arc(k)).rem_euclid(per);
-    let sides = [side(0), side(1), side(2), side(3)];
-    let ratio = (sides[0] + sides[2]) / (sides[1] + sides[3]);
+    // boundary loop positions of each side, corner to corner inclusive
+    let side_loop: Vec<Vec<usize>> = (0..4)
+        .map(|k| {
+            let mut out = vec![corners[k]];
+            let mut i = corners[k];
+            while i != corners[(k + 1) % 4] {
+                i = (i + 1) % m;
+                out.push(i);
+            }
+            out
+        })
+        .collect();
     let area = target.area();
+    let conf = conformal_coordinates(target, lp, &side_loop)?;
+    let ratio = conf.modulus;
     let ny = (area / (ratio * h * h)).sqrt().round().max(1.0) as usize;
     let nx = (ratio * ny as Real).round().max(1.0) as usize;
     if nx < 2 || ny < 2 {
@@ -168,47 +178,54 @@ pub(crate) fn initial_grid_indexed(
             area * 1e-6
         )));
     }
-    // boundary vertices -> rectangle [0, nx] x [0, ny]
-    let counts = [nx, ny, nx, ny];
-    let rect_corner = [
-        (0.0, 0.0),
-        (nx as Real, 0.0),
-        (nx as Real, ny as Real),
-        (0.0, ny as Real),
-    ];
-    let mut uv = vec![(0.0, 0.0); v.len()];
-    let mut is_boundary = vec![false; v.len()];
-    for (k, &c) in corners.iter().enumerate() {
-        let (a, b) = (rect_corner[k], rect_corner[(k + 1) % 4]);
-        let len = sides[k].max(1e-12);
-        let mut i = c;
-        loop {
-            let t = ((index.boundary_arc[i] - arc(k)).rem_euclid(per) / len).min(1.0);
-            uv[lp[i]] = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
-            is_boundary[lp[i]] = true;
-            i = (i + 1) % m;
-            if i == corners[(k + 1) % 4] {
-                break;
+    let uv: Vec<(Real, Real)> = conf
+        .u
+        .iter()
+        .zip(&conf.v)
+        .map(|(u, w)| (u * nx as Real, w * ny as Real))
+        .collect();
+    let locator = Locator::new(target, &uv, nx, ny);
+    // lattice point on side k where the side's free coordinate equals `t` (0..1)
+    let on_side = |k: usize, t: Real| {
+        let coord = |i: usize| {
+            let b = lp[side_loop[k][i]];
+            if k.is_multiple_of(2) {
+                conf.u[b]
+            } else {
+                conf.v[b]
+            }
+        };
+        let sl = &side_loop[k];
+        let mut best = (Real::INFINITY, v[lp[sl[0]]]);
+        for i in 0..sl.len() - 1 {
+            let (a, b) = (coord(i), coord(i + 1));
+            if (a - t) * (b - t) <= 0.0 && a != b {
+                let s = (t - a) / (b - a);
+                let p = v[lp[sl[i]]] + (v[lp[sl[i + 1]]] - v[lp[sl[i]]]) * s;
+                return p;
+            }
+            if (a - t).abs() < best.0 {
+                best = ((a - t).abs(), v[lp[sl[i]]]);
             }
         }
-    }
-    harmonic_interior(target, &is_boundary, &mut uv)?;
-    let locator = Locator::new(target, &uv, nx, ny);
-    let arc_at = |k: usize, t: Real| arc(k) + sides[k] * t;
+        best.1
+    };
+    let smooth = corners.map(|c| turning[c] < SMOOTH_CORNER_TURN);
+    let open = nx >= 4 && ny >= 4 && smooth.iter().any(|&s| s);
     let failure = std::cell::Cell::new(None);
     let mesh = QuadMesh::from_fn(nx, ny, |i, j| {
-        let on_edge = |s: usize, t: Real| index.boundary_at(arc_at(s, t));
+        let (fu, fv) = (i as Real / nx as Real, j as Real / ny as Real);
         if j == 0 {
-            return on_edge(0, i as Real / counts[0] as Real);
+            return on_side(0, fu);
         }
         if i == nx {
-            return on_edge(1, j as Real / counts[1] as Real);
+            return on_side(1, fv);
         }
         if j == ny {
-            return on_edge(2, (nx - i) as Real / counts[2] as Real);
+            return on_side(2, fu);
         }
         if i == 0 {
-            return on_edge(3, (ny - j) as Real / counts[3] as Real);
+            return on_side(3, fv);
         }
         match locator.lift(i as Real, j as Real) {
             Some(p) => p,
@@ -223,73 +240,199 @@ pub(crate) fn initial_grid_indexed(
             "grid point ({i}, {j}) is outside the parametrised target"
         )));
     }
+    // a grid corner where the boundary hardly turns would get a face corner near 180
+    // degrees: open it into two faces meeting at an interior valence-3 vertex
+    if open {
+        return Ok(open_smooth_corners(&mesh, nx, ny, smooth));
+    }
     Ok(mesh)
 }
 
-/// Solve the Laplace equation with clamped positive cotangent weights (a Tutte embedding:
-/// injective for the convex rectangle) for the interior parameters.
-fn harmonic_interior(
+/// Boundary turning (radians, over 0.75 unit either side) below which a grid corner is
+/// opened by [`open_smooth_corners`]: sharp corners of the targets turn by 73-100 degrees,
+/// smooth boundaries by under 10.
+const SMOOTH_CORNER_TURN: Real = std::f64::consts::FRAC_PI_4;
+
+/// Replace the corner face of an `nx` x `ny` grid (built by `QuadMesh::from_fn`) and its two
+/// neighbours along the boundary by two faces that share the corner vertex, at every corner
+/// flagged in `smooth` (SW, SE, NE, NW). The corner vertex then has two faces, like any
+/// boundary vertex, and the grid vertex diagonally inside it three (an irregular vertex):
+/// in the conformal map a grid corner's 90 degrees open to the 180 degrees of a smooth
+/// boundary, two faces of about 90 degrees each. Needs `nx, ny >= 4`.
+fn open_smooth_corners(grid: &QuadMesh, nx: usize, ny: usize, smooth: [bool; 4]) -> QuadMesh {
+    let id = |i: usize, j: usize| j * (nx + 1) + i;
+    let cell = |i: usize, j: usize| j * nx + i;
+    let mut drop_face = vec![false; grid.faces.len()];
+    let mut drop_vertex = vec![false; grid.vertices.len()];
+    let mut extra = Vec::new();
+    let at = |c: usize, k: isize| {
+        if c == 0 {
+            k as usize
+        } else {
+            (c as isize - k) as usize
+        }
+    };
+    for (k, (ci, cj)) in [(0, 0), (nx, 0), (nx, ny), (0, ny)].into_iter().enumerate() {
+        if !smooth[k] {
+            continue;
+        }
+        // lattice points at steps (a, b) inward from the corner
+        let p = |a: isize, b: isize| id(at(ci, a), at(cj, b));
+        let f =
+            |a: isize, b: isize| cell(at(ci, a).min(at(ci, a + 1)), at(cj, b).min(at(cj, b + 1)));
+        for (a, b) in [(0, 0), (1, 0), (0, 1)] {
+            drop_face[f(a, b)] = true;
+        }
+        drop_vertex[p(1, 0)] = true;
+        drop_vertex[p(0, 1)] = true;
+        let mut f1 = [p(0, 0), p(2, 0), p(2, 1), p(1, 1)];
+        let mut f2 = [p(0, 2), p(0, 0), p(1, 1), p(1, 2)];
+        // mirrored corners (SE, NW) reverse the cyclic order
+        if k % 2 == 1 {
+            f1.reverse();
+            f2.reverse();
+        }
+        extra.push(f1);
+        extra.push(f2);
+    }
+    let mut index = vec![usize::MAX; grid.vertices.len()];
+    let mut vertices = Vec::with_capacity(grid.vertices.len());
+    for (v, p) in grid.vertices.iter().enumerate() {
+        if !drop_vertex[v] {
+            index[v] = vertices.len();
+            vertices.push(*p);
+        }
+    }
+    let faces = grid
+        .faces
+        .iter()
+        .zip(&drop_face)
+        .filter(|(_, &d)| !d)
+        .map(|(f, _)| *f)
+        .chain(extra)
+        .map(|f| f.map(|v| index[v]))
+        .collect();
+    QuadMesh { vertices, faces }
+}
+
+/// Conformal coordinates of a patch with four marked sides.
+struct Conformal {
+    /// 0 on side 3, 1 on side 1, harmonic, free (natural boundary) on sides 0 and 2
+    u: Vec<Real>,
+    /// 0 on side 0, 1 on side 2, likewise
+    v: Vec<Real>,
+    /// width / height of the rectangle the patch maps to conformally
+    modulus: Real,
+}
+
+/// The two harmonic measures of the quadrilateral: the level lines of `u` and `v` cross at
+/// right angles (the pair maps the patch conformally onto a rectangle of aspect `modulus`),
+/// so the lattice lifted from them has square faces, sized by the conformal factor.
+fn conformal_coordinates(
     target: &TargetMesh,
-    is_boundary: &[bool],
-    uv: &mut [(Real, Real)],
-) -> Result<(), SurfaceError> {
+    lp: &[usize],
+    side_loop: &[Vec<usize>],
+) -> Result<Conformal, SurfaceError> {
+    let nv = target.vertices.len();
+    let dirichlet = |lo: usize, hi: usize| {
+        let mut fixed = vec![None; nv];
+        for &k in &side_loop[lo] {
+            fixed[lp[k]] = Some(0.0);
+        }
+        for &k in &side_loop[hi] {
+            fixed[lp[k]] = Some(1.0);
+        }
+        fixed
+    };
+    let (u, eu) = laplace_dirichlet(target, &dirichlet(3, 1))?;
+    let (v, ev) = laplace_dirichlet(target, &dirichlet(0, 2))?;
+    if !(eu > 0.0 && ev > 0.0) {
+        return Err(SurfaceError::Internal(
+            "conformal modulus of the target is degenerate".into(),
+        ));
+    }
+    Ok(Conformal {
+        u,
+        v,
+        modulus: (ev / eu).sqrt(),
+    })
+}
+
+/// Cotangent weights `w_ij` (half the sum of the cotangents opposite each edge), as a list
+/// of `(i, j, w)` per triangle corner.
+fn cotangent_weights(target: &TargetMesh) -> Vec<(usize, usize, Real)> {
     let v = &target.vertices;
-    let mut col = vec![usize::MAX; v.len()];
-    let mut n = 0;
-    let mut used = vec![false; v.len()];
-    for t in &target.triangles {
-        for &i in t {
-            used[i] = true;
-        }
-    }
-    for i in 0..v.len() {
-        if used[i] && !is_boundary[i] {
-            col[i] = n;
-            n += 1;
-        }
-    }
-    if n == 0 {
-        return Ok(());
-    }
-    let mut pattern = Vec::new();
-    let mut values = Vec::new();
-    let mut rhs_u = vec![0.0; n];
-    let mut rhs_v = vec![0.0; n];
+    let mut out = Vec::with_capacity(3 * target.triangles.len());
     for t in &target.triangles {
         for k in 0..3 {
             let (i, j, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
             let a = v[i] - v[o];
             let b = v[j] - v[o];
             let cot = a.dot(&b) / a.cross(&b).norm().max(1e-300);
-            let w = (0.5 * cot).max(0.05);
+            out.push((i, j, 0.5 * cot));
+        }
+    }
+    out
+}
+
+/// Minimise the Dirichlet energy (cotangent Laplacian) with the values `fixed` where set;
+/// returns the solution and its energy.
+fn laplace_dirichlet(
+    target: &TargetMesh,
+    fixed: &[Option<Real>],
+) -> Result<(Vec<Real>, Real), SurfaceError> {
+    let nv = target.vertices.len();
+    let mut col = vec![usize::MAX; nv];
+    let mut n = 0;
+    for t in &target.triangles {
+        for &i in t {
+            if fixed[i].is_none() && col[i] == usize::MAX {
+                col[i] = n;
+                n += 1;
+            }
+        }
+    }
+    let weights = cotangent_weights(target);
+    let mut x: Vec<Real> = fixed.iter().map(|f| f.unwrap_or(0.0)).collect();
+    if n > 0 {
+        let mut pattern = Vec::new();
+        let mut values = Vec::new();
+        let mut rhs = vec![0.0; n];
+        for &(i, j, w) in &weights {
             for (p, q) in [(i, j), (j, i)] {
                 if col[p] == usize::MAX {
                     continue;
                 }
                 pattern.push((col[p], col[p]));
                 values.push(w);
-                if col[q] == usize::MAX {
-                    rhs_u[col[p]] += w * uv[q].0;
-                    rhs_v[col[p]] += w * uv[q].1;
-                } else if p < q {
-                    pattern.push((col[p], col[q]));
-                    values.push(-w);
+                match fixed[q] {
+                    Some(val) => rhs[col[p]] += w * val,
+                    None if p < q => {
+                        pattern.push((col[p], col[q]));
+                        values.push(-w);
+                    }
+                    None => {}
                 }
             }
         }
-    }
-    let mut solver = SpdSolver::new(n, &pattern)?;
-    if !solver.solve(&values, &mut rhs_u)? || !solver.solve(&values, &mut rhs_v)? {
-        return Err(SurfaceError::Internal(
-            "harmonic parametrisation is singular".into(),
-        ));
-    }
-    for i in 0..v.len() {
-        if col[i] != usize::MAX {
-            uv[i] = (rhs_u[col[i]], rhs_v[col[i]]);
+        let mut solver = SpdSolver::new(n, &pattern)?;
+        solver.set_values(&values);
+        if !solver.solve(&mut rhs)? {
+            return Err(SurfaceError::Internal(
+                "conformal parametrisation is singular".into(),
+            ));
+        }
+        for i in 0..nv {
+            if col[i] != usize::MAX {
+                x[i] = rhs[col[i]];
+            }
         }
     }
-    Ok(())
+    let energy = weights
+        .iter()
+        .map(|&(i, j, w)| w * (x[i] - x[j]).powi(2))
+        .sum();
+    Ok((x, energy))
 }
 
 /// Point location in the parameter rectangle by a bucket grid of unit cells.
@@ -359,5 +502,188 @@ impl<'a> Locator<'a> {
             }
         }
         best.filter(|b| b.0 > -1e-6).map(|b| b.1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Flat annular sector, radii `r1..r2`, angle `phi`, sampled `n` x `n`.
+    fn sector(n: usize, r1: Real, r2: Real, phi: Real) -> (TargetMesh, [usize; 4]) {
+        let mut m = TargetMesh::default();
+        for j in 0..=n {
+            for i in 0..=n {
+                let a = phi * (i as Real / n as Real - 0.5);
+                let r = r1 + (r2 - r1) * j as Real / n as Real;
+                m.vertices.push(Point3::new(r * a.sin(), r * a.cos(), 0.0));
+            }
+        }
+        let id = |i: usize, j: usize| j * (n + 1) + i;
+        for j in 0..n {
+            for i in 0..n {
+                m.triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                m.triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        (m, [id(0, 0), id(n, 0), id(n, n), id(0, n)])
+    }
+
+    #[test]
+    fn conformal_modulus_of_an_annular_sector_is_angle_over_log_ratio() {
+        // log maps the sector onto a rectangle phi wide and ln(r2 / r1) high
+        let (phi, r1, r2) = (1.2, 1000.0, 2500.0);
+        let (mesh, corner_vertices) = sector(48, r1, r2, phi);
+        let lp = mesh.validate().unwrap();
+        let corners = corner_vertices.map(|c| lp.iter().position(|&b| b == c).unwrap());
+        let side_loop: Vec<Vec<usize>> = (0..4)
+            .map(|k| {
+                let mut out = vec![corners[k]];
+                let mut i = corners[k];
+                while i != corners[(k + 1) % 4] {
+                    i = (i + 1) % lp.len();
+                    out.push(i);
+                }
+                out
+            })
+            .collect();
+        let conf = conformal_coordinates(&mesh, &lp, &side_loop).unwrap();
+        let expected = phi / (r2 / r1).ln();
+        assert!(
+            (conf.modulus / expected - 1.0).abs() < 0.01,
+            "modulus {} expected {expected}",
+            conf.modulus
+        );
+        // v is the normalised log radius, u the normalised angle
+        for (k, p) in mesh.vertices.iter().enumerate() {
+            let r = p.coords.norm();
+            let v = (r / r1).ln() / (r2 / r1).ln();
+            let u = p.x.atan2(p.y) / phi + 0.5;
+            assert!(
+                (conf.v[k] - v).abs() < 0.01,
+                "vertex {k}: v {} vs {v}",
+                conf.v[k]
+            );
+            assert!(
+                (conf.u[k] - u).abs() < 0.01,
+                "vertex {k}: u {} vs {u}",
+                conf.u[k]
+            );
+        }
+    }
+
+    #[test]
+    fn initial_grid_on_a_sector_has_square_faces_of_growing_size() {
+        let (mesh, _) = sector(48, 1000.0, 2500.0, 1.2);
+        let opts = SecondaryOptions {
+            unit_size: 200.0,
+            ..Default::default()
+        };
+        let grid = initial_grid(&mesh, &opts).unwrap();
+        let ratios: Vec<Real> = (0..grid.faces.len())
+            .map(|f| {
+                let p = grid.face_points(f);
+                let e = [0, 1, 2, 3].map(|k| (p[(k + 1) % 4] - p[k]).norm());
+                e.iter().copied().fold(0.0, Real::max)
+                    / e.iter().copied().fold(Real::INFINITY, Real::min)
+            })
+            .collect();
+        let worst = ratios.iter().copied().fold(0.0, Real::max);
+        assert!(worst < 1.3, "worst edge ratio {worst}");
+        // conformal: faces near the outer arc are larger than near the inner one
+        let size = |f: usize| {
+            let p = grid.face_points(f);
+            (p[2] - p[0]).norm()
+        };
+        let (first, last) = (size(0), size(grid.faces.len() - 1));
+        assert!(
+            (first / last - 1.0).abs() > 0.5,
+            "corner faces {first} and {last} mm"
+        );
+    }
+
+    /// Ellipse with semi-axes `a`, `b` (a square grid squeezed onto the disc) on the
+    /// paraboloid of revolution `z = -(x^2 + y^2) / (2 radius)` (flat when `radius` is 0).
+    fn oval(n: usize, a: Real, b: Real, radius: Real) -> TargetMesh {
+        let mut m = TargetMesh::default();
+        for j in 0..=n {
+            for i in 0..=n {
+                let s = 2.0 * i as Real / n as Real - 1.0;
+                let t = 2.0 * j as Real / n as Real - 1.0;
+                let (x, y) = (
+                    a * s * (1.0 - t * t / 2.0).sqrt(),
+                    b * t * (1.0 - s * s / 2.0).sqrt(),
+                );
+                let z = if radius > 0.0 {
+                    -(x * x + y * y) / (2.0 * radius)
+                } else {
+                    0.0
+                };
+                m.vertices.push(Point3::new(x, y, z));
+            }
+        }
+        let id = |i: usize, j: usize| j * (n + 1) + i;
+        for j in 0..n {
+            for i in 0..n {
+                m.triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                m.triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn smooth_boundary_gets_opened_corners() {
+        let mesh = oval(48, 2200.0, 1600.0, 0.0);
+        let opts = SecondaryOptions {
+            unit_size: 300.0,
+            ..Default::default()
+        };
+        let grid = initial_grid(&mesh, &opts).unwrap();
+        let mut faces_at = vec![0usize; grid.vertices.len()];
+        for f in &grid.faces {
+            for &v in f {
+                faces_at[v] += 1;
+            }
+        }
+        // no grid corner with a single face; four interior vertices of valence 3
+        assert!(faces_at.iter().all(|&c| c >= 2), "{faces_at:?}");
+        let topo = crate::topology::Topology::new(&grid).unwrap();
+        let irregular = (0..grid.vertices.len())
+            .filter(|&v| !topo.boundary[v] && faces_at[v] == 3)
+            .count();
+        assert_eq!(irregular, 4);
+        assert!((0..grid.vertices.len()).all(|v| !topo.corner[v]));
+        // every face convex and counter-clockwise seen from +Z
+        for f in 0..grid.faces.len() {
+            let p = grid.face_points(f);
+            for k in 0..4 {
+                let turn = (p[(k + 1) % 4] - p[k]).cross(&(p[(k + 2) % 4] - p[(k + 1) % 4]));
+                assert!(turn.z > 0.0, "face {f} corner {}", (k + 1) % 4);
+            }
+        }
+        // a rectangle keeps its four single-face corners
+        let (sector_mesh, _) = sector(48, 1000.0, 2500.0, 1.2);
+        let grid = initial_grid(&sector_mesh, &opts).unwrap();
+        let topo = crate::topology::Topology::new(&grid).unwrap();
+        assert_eq!(topo.corner.iter().filter(|&&c| c).count(), 4);
+    }
+
+    #[test]
+    fn oval_dome_is_planar_and_conical_at_300() {
+        // smooth boundary on a dome of revolution: the opened corners keep every face
+        // planar and every vertex conical; the faces next to them stay small (edge ratio,
+        // docs/secondary.md)
+        let target = oval(48, 2200.0, 1600.0, 4500.0);
+        let opts = SecondaryOptions {
+            unit_size: 300.0,
+            ..Default::default()
+        };
+        let (_, r) = crate::build_secondary(&target, &opts, &mut |_, _| {}).unwrap();
+        assert!(r.planarity_max <= 0.002, "{r:?}");
+        assert!(r.conical_max_deg <= 0.5, "{r:?}");
+        assert!(r.closeness_max <= 0.05, "{r:?}");
+        assert!(r.boundary_max <= 0.05, "{r:?}");
+        assert!(r.non_convex_faces.is_empty(), "{r:?}");
     }
 }

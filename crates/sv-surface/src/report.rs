@@ -195,7 +195,8 @@ pub(crate) fn measure(
             }
         }
     }
-    r.coverage = coverage(mesh, index.mesh, mean);
+    let (cov, uncovered) = coverage(mesh, index.mesh, mean);
+    r.coverage = cov;
     let g = goals;
     if r.planarity_max > g.planarity {
         r.unmet.push(format!(
@@ -222,8 +223,23 @@ pub(crate) fn measure(
         ));
     }
     if r.coverage < g.coverage {
+        let near = uncovered
+            .map(|p| {
+                let v = (0..mesh.vertices.len())
+                    .min_by(|&a, &b| {
+                        (mesh.vertices[a] - p)
+                            .norm()
+                            .total_cmp(&(mesh.vertices[b] - p).norm())
+                    })
+                    .unwrap_or(0);
+                format!(
+                    "; the target farthest from the mesh is at ({:.0}, {:.0}, {:.0}) mm, near vertex {v}",
+                    p.x, p.y, p.z
+                )
+            })
+            .unwrap_or_default();
         r.unmet
-            .push(format!("coverage {:.3} < {}", r.coverage, g.coverage));
+            .push(format!("coverage {:.3} < {}{near}", r.coverage, g.coverage));
     }
     if r.edge_ratio_fraction < g.edge_ratio_fraction {
         r.unmet.push(format!(
@@ -251,8 +267,9 @@ pub(crate) fn rhombus_fit(quad: &[Point3; 4]) -> Real {
     }
 }
 
-/// Area fraction of the target within `0.1 * mean` of the hub mesh (triangulated).
-fn coverage(mesh: &QuadMesh, target: &TargetMesh, mean: Real) -> Real {
+/// Area fraction of the target within `0.1 * mean` of the hub mesh (triangulated), and the
+/// sampled target point farthest from the mesh when some are not covered.
+fn coverage(mesh: &QuadMesh, target: &TargetMesh, mean: Real) -> (Real, Option<Point3>) {
     let mut tri = TargetMesh {
         vertices: mesh.vertices.clone(),
         triangles: Vec::with_capacity(mesh.faces.len() * 4),
@@ -272,22 +289,29 @@ fn coverage(mesh: &QuadMesh, target: &TargetMesh, mean: Real) -> Real {
         }
     }
     let Ok(index) = TargetIndex::new(&tri) else {
-        return 0.0;
+        return (0.0, None);
     };
     let v = &target.vertices;
     let mut covered = 0.0;
     let mut total = 0.0;
+    let mut farthest: Option<(Real, Point3)> = None;
+    let mut hint = None;
     for t in &target.triangles {
         let a = crate::target::triangle_area(v, t);
         let c = Point3::from((v[t[0]].coords + v[t[1]].coords + v[t[2]].coords) / 3.0);
         total += a;
-        if (index.closest(&c).point - c).norm() <= 0.1 * mean {
+        let cp = index.closest_near(&c, hint);
+        hint = Some(cp.triangle);
+        let d = (cp.point - c).norm();
+        if d <= 0.1 * mean {
             covered += a;
+        } else if farthest.is_none_or(|f| d > f.0) {
+            farthest = Some((d, c));
         }
     }
     if total > 0.0 {
-        covered / total
+        (covered / total, farthest.map(|f| f.1))
     } else {
-        0.0
+        (0.0, None)
     }
 }

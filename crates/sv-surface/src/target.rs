@@ -323,45 +323,77 @@ impl<'a> TargetIndex<'a> {
 
     /// Closest point on the mesh (expanding shell search over the uniform grid).
     pub(crate) fn closest(&self, p: &Point3) -> ClosestPoint {
+        self.closest_near(p, None)
+    }
+
+    /// Closest point on the mesh; `hint` is a triangle expected to be near (the answer
+    /// for a nearby query): its distance bounds the search to the cells within that
+    /// distance, which is exact and much cheaper than the shell search when it is small.
+    pub(crate) fn closest_near(&self, p: &Point3, hint: Option<usize>) -> ClosestPoint {
         let v = &self.mesh.vertices;
         let dims = self.dims;
-        let c = [0, 1, 2].map(|k| {
-            let x = ((p[k] - self.lo[k]) / self.cell).floor();
-            x.clamp(0.0, (dims[k] - 1) as Real) as i64
-        });
-        // distance from p to the grid box (to bound the shells)
-        let mut outside = 0.0;
-        for k in 0..3 {
-            let hi = self.lo[k] + dims[k] as Real * self.cell;
-            let d = (self.lo[k] - p[k]).max(p[k] - hi).max(0.0);
-            outside += d * d;
-        }
-        let outside = outside.sqrt();
         let mut best = (Real::INFINITY, *p, [0.0; 3], 0usize);
-        let max_r = dims.iter().copied().max().unwrap_or(1) as i64;
-        for r in 0..=max_r {
-            for z in (c[2] - r).max(0)..=(c[2] + r).min(dims[2] as i64 - 1) {
-                for y in (c[1] - r).max(0)..=(c[1] + r).min(dims[1] as i64 - 1) {
-                    for x in (c[0] - r).max(0)..=(c[0] + r).min(dims[0] as i64 - 1) {
-                        let on_shell =
-                            (x - c[0]).abs() == r || (y - c[1]).abs() == r || (z - c[2]).abs() == r;
-                        if !on_shell {
-                            continue;
-                        }
-                        let idx = ((z as usize) * dims[1] + y as usize) * dims[0] + x as usize;
-                        for &ti in &self.cells[idx] {
-                            let t = self.mesh.triangles[ti as usize];
-                            let (q, bary) = closest_on_triangle(p, &v[t[0]], &v[t[1]], &v[t[2]]);
-                            let d = (q - p).norm_squared();
-                            if d < best.0 {
-                                best = (d, q, bary, ti as usize);
+        let test = |ti: usize, best: &mut (Real, Point3, [Real; 3], usize)| {
+            let t = self.mesh.triangles[ti];
+            let (q, bary) = closest_on_triangle(p, &v[t[0]], &v[t[1]], &v[t[2]]);
+            let d = (q - p).norm_squared();
+            if d < best.0 {
+                *best = (d, q, bary, ti);
+            }
+        };
+        let cell_of = |x: Real, k: usize| {
+            (((x - self.lo[k]) / self.cell).floor()).clamp(0.0, (dims[k] - 1) as Real) as usize
+        };
+        let mut done = false;
+        if let Some(h) = hint.filter(|&h| h < self.mesh.triangles.len()) {
+            test(h, &mut best);
+            let r = best.0.sqrt();
+            if r <= 2.0 * self.cell {
+                let a = [0, 1, 2].map(|k| cell_of(p[k] - r, k));
+                let b = [0, 1, 2].map(|k| cell_of(p[k] + r, k));
+                for z in a[2]..=b[2] {
+                    for y in a[1]..=b[1] {
+                        for x in a[0]..=b[0] {
+                            for &ti in &self.cells[(z * dims[1] + y) * dims[0] + x] {
+                                test(ti as usize, &mut best);
                             }
                         }
                     }
                 }
+                done = true;
             }
-            if best.0.is_finite() && best.0.sqrt() <= r as Real * self.cell - outside {
-                break;
+        }
+        if !done {
+            let c = [0, 1, 2].map(|k| cell_of(p[k], k) as i64);
+            // distance from p to the grid box (to bound the shells)
+            let mut outside = 0.0;
+            for k in 0..3 {
+                let hi = self.lo[k] + dims[k] as Real * self.cell;
+                let d = (self.lo[k] - p[k]).max(p[k] - hi).max(0.0);
+                outside += d * d;
+            }
+            let outside = outside.sqrt();
+            let max_r = dims.iter().copied().max().unwrap_or(1) as i64;
+            for r in 0..=max_r {
+                for z in (c[2] - r).max(0)..=(c[2] + r).min(dims[2] as i64 - 1) {
+                    for y in (c[1] - r).max(0)..=(c[1] + r).min(dims[1] as i64 - 1) {
+                        for x in (c[0] - r).max(0)..=(c[0] + r).min(dims[0] as i64 - 1) {
+                            let on_shell = (x - c[0]).abs() == r
+                                || (y - c[1]).abs() == r
+                                || (z - c[2]).abs() == r;
+                            if !on_shell {
+                                continue;
+                            }
+                            let idx = ((z as usize) * dims[1] + y as usize) * dims[0] + x as usize;
+                            for &ti in &self.cells[idx] {
+                                test(ti as usize, &mut best);
+                            }
+                        }
+                    }
+                }
+                if best.0.is_finite() && best.0.sqrt() <= r as Real * self.cell - outside {
+                    break;
+                }
             }
         }
         let t = self.mesh.triangles[best.3];
@@ -545,6 +577,14 @@ mod tests {
                 })
                 .fold(Real::INFINITY, Real::min);
             assert!(((c.point - q).norm() - brute).abs() < 1e-9, "query {k}");
+            // any hint, near or far, gives the same distance
+            for hint in [c.triangle, (c.triangle + 7) % m.triangles.len(), 0] {
+                let h = idx.closest_near(&q, Some(hint));
+                assert!(
+                    ((h.point - q).norm() - brute).abs() < 1e-9,
+                    "query {k} hint {hint}"
+                );
+            }
         }
         let b = idx.closest_on_boundary(&Point3::new(5.0, -2.0, 0.0));
         assert!((b.point - Point3::new(5.0, 0.0, 0.0)).norm() < 1e-12);
