@@ -1,13 +1,15 @@
-//! DXF ASCII R2000 (AC1015) writer for one strip: `$INSUNITS` = 4 (mm), one closed
-//! LWPOLYLINE with bulges per contour (nominal shape; the CAM applies kerf compensation,
-//! lead-ins and cut order), single-stroke etching, and an INFO layer that is never cut.
+//! DXF ASCII R2000 (AC1015) writer shared by the strip drawings and the nested sheets:
+//! `$INSUNITS` = 4 (mm), one closed LWPOLYLINE with bulges per contour (nominal shape; the
+//! CAM applies kerf compensation, lead-ins and cut order), single-stroke etching, and an
+//! INFO layer that is never cut.
 //!
-//! Layers: `OUTSIDE` (part outline), `INSIDE` (slots), `ETCH` (labels, fold marks, as
-//! open LWPOLYLINEs), `INFO` (nominal flat tiles, pins, strip title; not plotted).
+//! Layers: `OUTSIDE` (part outlines), `INSIDE` (slots), `ETCH` (labels, fold marks, as
+//! open LWPOLYLINEs), `INFO` (nominal flat tiles, pins, titles, sheet outline, pierce
+//! points; not plotted).
 
 use std::fmt::Write;
 
-use sv_strips::{Contour, FlatStrip, StripProfile};
+use sv_strips::{FlatStrip, StripProfile};
 
 use crate::font::text_strokes;
 
@@ -80,330 +82,392 @@ fn record_head(o: &mut Out, kind: &str, owner: &str, subclass: &str) -> String {
     h
 }
 
-fn lwpolyline(o: &mut Out, layer: &str, points: &[[f64; 3]], closed: bool) {
-    let h = o.handle();
-    o.pair(0, "LWPOLYLINE");
-    o.pair(5, h);
-    o.pair(330, H_MODEL_BR);
-    o.pair(100, "AcDbEntity");
-    o.pair(8, layer);
-    o.pair(100, "AcDbPolyline");
-    o.pair(90, points.len());
-    o.pair(70, if closed { 1 } else { 0 });
-    o.real(43, 0.0);
-    for p in points {
-        o.real(10, p[0]);
-        o.real(20, p[1]);
-        if p[2] != 0.0 {
-            o.real(42, p[2]);
+/// The ENTITIES of one drawing, written in the order they are added (the CAM cuts in
+/// file order unless told otherwise), then wrapped in a complete R2000 file by [`finish`].
+///
+/// [`finish`]: Drawing::finish
+pub(crate) struct Drawing {
+    body: Out,
+}
+
+impl Drawing {
+    pub(crate) fn new() -> Self {
+        Self {
+            body: Out {
+                s: String::new(),
+                next: FIRST_FREE,
+            },
         }
     }
-}
 
-fn open_line(o: &mut Out, layer: &str, pts: &[[f64; 2]]) {
-    let v: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], 0.0]).collect();
-    lwpolyline(o, layer, &v, false);
-}
+    fn entity(&mut self, kind: &str, layer: &str, subclass: &str) {
+        let o = &mut self.body;
+        let h = o.handle();
+        o.pair(0, kind);
+        o.pair(5, h);
+        o.pair(330, H_MODEL_BR);
+        o.pair(100, "AcDbEntity");
+        o.pair(8, layer);
+        o.pair(100, subclass);
+    }
 
-fn contour(o: &mut Out, layer: &str, c: &Contour) {
-    lwpolyline(o, layer, &c.0, true);
+    /// An LWPOLYLINE through `points` (`[x, y, bulge of the segment leaving the point]`).
+    pub(crate) fn polyline(&mut self, layer: &str, points: &[[f64; 3]], closed: bool) {
+        self.entity("LWPOLYLINE", layer, "AcDbPolyline");
+        let o = &mut self.body;
+        o.pair(90, points.len());
+        o.pair(70, if closed { 1 } else { 0 });
+        o.real(43, 0.0);
+        for p in points {
+            o.real(10, p[0]);
+            o.real(20, p[1]);
+            if p[2] != 0.0 {
+                o.real(42, p[2]);
+            }
+        }
+    }
+
+    /// An open polyline of straight segments.
+    pub(crate) fn open_line(&mut self, layer: &str, pts: &[[f64; 2]]) {
+        let v: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        self.polyline(layer, &v, false);
+    }
+
+    /// A closed polygon of straight segments.
+    pub(crate) fn polygon(&mut self, layer: &str, pts: &[[f64; 2]]) {
+        let v: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        self.polyline(layer, &v, true);
+    }
+
+    /// Etched single-stroke text centred on `at`.
+    pub(crate) fn strokes(&mut self, layer: &str, text: &str, at: [f64; 2], angle: f64, h: f64) {
+        for s in text_strokes(text, at, angle, h) {
+            self.open_line(layer, &s);
+        }
+    }
+
+    /// A TEXT entity (style Standard) with its baseline starting at `at`, for people.
+    pub(crate) fn text(&mut self, layer: &str, text: &str, at: [f64; 2], height: f64) {
+        self.entity("TEXT", layer, "AcDbText");
+        let o = &mut self.body;
+        o.real(10, at[0]);
+        o.real(20, at[1]);
+        o.real(30, 0.0);
+        o.real(40, height);
+        o.pair(1, text);
+        o.pair(7, "Standard");
+        o.pair(100, "AcDbText");
+    }
+
+    /// A POINT entity.
+    pub(crate) fn point(&mut self, layer: &str, at: [f64; 2]) {
+        self.entity("POINT", layer, "AcDbPoint");
+        let o = &mut self.body;
+        o.real(10, at[0]);
+        o.real(20, at[1]);
+        o.real(30, 0.0);
+    }
+
+    /// The complete DXF file; `ext_min`/`ext_max` are the drawing extents (mm).
+    pub(crate) fn finish(self, ext_min: [f64; 2], ext_max: [f64; 2]) -> String {
+        let entities = self.body.s;
+        let seed = self.body.next;
+        let mut o = Out {
+            s: String::with_capacity(entities.len() + 8192),
+            next: 0x11,
+        };
+        // HEADER
+        o.pair(0, "SECTION");
+        o.pair(2, "HEADER");
+        o.pair(9, "$ACADVER");
+        o.pair(1, "AC1015");
+        o.pair(9, "$HANDSEED");
+        o.pair(5, format!("{seed:X}"));
+        o.pair(9, "$INSUNITS");
+        o.pair(70, 4);
+        o.pair(9, "$MEASUREMENT");
+        o.pair(70, 1);
+        o.pair(9, "$EXTMIN");
+        o.real(10, ext_min[0]);
+        o.real(20, ext_min[1]);
+        o.real(30, 0.0);
+        o.pair(9, "$EXTMAX");
+        o.real(10, ext_max[0]);
+        o.real(20, ext_max[1]);
+        o.real(30, 0.0);
+        o.pair(0, "ENDSEC");
+        o.pair(0, "SECTION");
+        o.pair(2, "CLASSES");
+        o.pair(0, "ENDSEC");
+        // TABLES
+        o.pair(0, "SECTION");
+        o.pair(2, "TABLES");
+        table_head(&mut o, "VPORT", H_VPORT_TABLE, 1);
+        record_head(&mut o, "VPORT", H_VPORT_TABLE, "AcDbViewportTableRecord");
+        o.pair(2, "*Active");
+        o.pair(70, 0);
+        for (c, v) in [(10, 0.0), (20, 0.0), (11, 1.0), (21, 1.0)] {
+            o.real(c, v);
+        }
+        o.real(12, (ext_min[0] + ext_max[0]) / 2.0);
+        o.real(22, (ext_min[1] + ext_max[1]) / 2.0);
+        o.real(40, (ext_max[1] - ext_min[1]).max(1.0) * 1.1);
+        o.real(41, 2.0);
+        o.pair(0, "ENDTAB");
+        table_head(&mut o, "LTYPE", H_LTYPE_TABLE, 3);
+        for name in ["ByBlock", "ByLayer", "Continuous"] {
+            record_head(&mut o, "LTYPE", H_LTYPE_TABLE, "AcDbLinetypeTableRecord");
+            o.pair(2, name);
+            o.pair(70, 0);
+            o.pair(
+                3,
+                if name == "Continuous" {
+                    "Solid line"
+                } else {
+                    ""
+                },
+            );
+            o.pair(72, 65);
+            o.pair(73, 0);
+            o.real(40, 0.0);
+        }
+        o.pair(0, "ENDTAB");
+        let layers = [
+            ("0", 7, true),
+            (LAYER_OUTSIDE, 1, true),
+            (LAYER_INSIDE, 5, true),
+            (LAYER_ETCH, 3, true),
+            (LAYER_INFO, 8, false),
+        ];
+        table_head(&mut o, "LAYER", H_LAYER_TABLE, layers.len());
+        for (name, color, plot) in layers {
+            record_head(&mut o, "LAYER", H_LAYER_TABLE, "AcDbLayerTableRecord");
+            o.pair(2, name);
+            o.pair(70, 0);
+            o.pair(62, color);
+            o.pair(6, "Continuous");
+            o.pair(290, if plot { 1 } else { 0 });
+            o.pair(370, -3);
+        }
+        o.pair(0, "ENDTAB");
+        table_head(&mut o, "STYLE", H_STYLE_TABLE, 1);
+        record_head(&mut o, "STYLE", H_STYLE_TABLE, "AcDbTextStyleTableRecord");
+        o.pair(2, "Standard");
+        o.pair(70, 0);
+        o.real(40, 0.0);
+        o.real(41, 1.0);
+        o.real(50, 0.0);
+        o.pair(71, 0);
+        o.real(42, 2.5);
+        o.pair(3, "txt");
+        o.pair(4, "");
+        o.pair(0, "ENDTAB");
+        table_head(&mut o, "VIEW", H_VIEW_TABLE, 0);
+        o.pair(0, "ENDTAB");
+        table_head(&mut o, "UCS", H_UCS_TABLE, 0);
+        o.pair(0, "ENDTAB");
+        table_head(&mut o, "APPID", H_APPID_TABLE, 1);
+        record_head(&mut o, "APPID", H_APPID_TABLE, "AcDbRegAppTableRecord");
+        o.pair(2, "ACAD");
+        o.pair(70, 0);
+        o.pair(0, "ENDTAB");
+        o.pair(0, "TABLE");
+        o.pair(2, "DIMSTYLE");
+        o.pair(5, H_DIMSTYLE_TABLE);
+        o.pair(330, "0");
+        o.pair(100, "AcDbSymbolTable");
+        o.pair(70, 1);
+        o.pair(100, "AcDbDimStyleTable");
+        o.pair(71, 0);
+        let h = o.handle();
+        o.pair(0, "DIMSTYLE");
+        o.pair(105, h);
+        o.pair(330, H_DIMSTYLE_TABLE);
+        o.pair(100, "AcDbSymbolTableRecord");
+        o.pair(100, "AcDbDimStyleTableRecord");
+        o.pair(2, "Standard");
+        o.pair(70, 0);
+        o.pair(0, "ENDTAB");
+        table_head(&mut o, "BLOCK_RECORD", H_BLOCK_RECORD_TABLE, 2);
+        for (h, name, layout) in [
+            (H_MODEL_BR, "*Model_Space", H_MODEL_LAYOUT),
+            (H_PAPER_BR, "*Paper_Space", H_PAPER_LAYOUT),
+        ] {
+            o.pair(0, "BLOCK_RECORD");
+            o.pair(5, h);
+            o.pair(330, H_BLOCK_RECORD_TABLE);
+            o.pair(100, "AcDbSymbolTableRecord");
+            o.pair(100, "AcDbBlockTableRecord");
+            o.pair(2, name);
+            o.pair(340, layout);
+        }
+        o.pair(0, "ENDTAB");
+        o.pair(0, "ENDSEC");
+        // BLOCKS
+        o.pair(0, "SECTION");
+        o.pair(2, "BLOCKS");
+        for (owner, name, paper) in [
+            (H_MODEL_BR, "*Model_Space", false),
+            (H_PAPER_BR, "*Paper_Space", true),
+        ] {
+            let h = o.handle();
+            o.pair(0, "BLOCK");
+            o.pair(5, h);
+            o.pair(330, owner);
+            o.pair(100, "AcDbEntity");
+            if paper {
+                o.pair(67, 1);
+            }
+            o.pair(8, "0");
+            o.pair(100, "AcDbBlockBegin");
+            o.pair(2, name);
+            o.pair(70, 0);
+            o.real(10, 0.0);
+            o.real(20, 0.0);
+            o.real(30, 0.0);
+            o.pair(3, name);
+            o.pair(1, "");
+            let h = o.handle();
+            o.pair(0, "ENDBLK");
+            o.pair(5, h);
+            o.pair(330, owner);
+            o.pair(100, "AcDbEntity");
+            if paper {
+                o.pair(67, 1);
+            }
+            o.pair(8, "0");
+            o.pair(100, "AcDbBlockEnd");
+        }
+        o.pair(0, "ENDSEC");
+        // ENTITIES
+        o.pair(0, "SECTION");
+        o.pair(2, "ENTITIES");
+        o.s.push_str(&entities);
+        o.pair(0, "ENDSEC");
+        // OBJECTS
+        o.pair(0, "SECTION");
+        o.pair(2, "OBJECTS");
+        o.pair(0, "DICTIONARY");
+        o.pair(5, H_ROOT_DICT);
+        o.pair(330, "0");
+        o.pair(100, "AcDbDictionary");
+        o.pair(281, 1);
+        o.pair(3, "ACAD_GROUP");
+        o.pair(350, H_GROUP_DICT);
+        o.pair(3, "ACAD_LAYOUT");
+        o.pair(350, H_LAYOUT_DICT);
+        o.pair(0, "DICTIONARY");
+        o.pair(5, H_GROUP_DICT);
+        o.pair(330, H_ROOT_DICT);
+        o.pair(100, "AcDbDictionary");
+        o.pair(281, 1);
+        o.pair(0, "DICTIONARY");
+        o.pair(5, H_LAYOUT_DICT);
+        o.pair(330, H_ROOT_DICT);
+        o.pair(100, "AcDbDictionary");
+        o.pair(281, 1);
+        o.pair(3, "Layout1");
+        o.pair(350, H_PAPER_LAYOUT);
+        o.pair(3, "Model");
+        o.pair(350, H_MODEL_LAYOUT);
+        for (h, name, order, br) in [
+            (H_MODEL_LAYOUT, "Model", 0, H_MODEL_BR),
+            (H_PAPER_LAYOUT, "Layout1", 1, H_PAPER_BR),
+        ] {
+            o.pair(0, "LAYOUT");
+            o.pair(5, h);
+            o.pair(330, H_LAYOUT_DICT);
+            o.pair(100, "AcDbPlotSettings");
+            o.pair(1, "");
+            o.pair(4, "A3");
+            o.pair(6, "");
+            for c in 40..=47 {
+                o.real(c, 0.0);
+            }
+            o.real(48, 0.0);
+            o.real(49, 0.0);
+            o.real(140, 0.0);
+            o.real(141, 0.0);
+            o.real(142, 1.0);
+            o.real(143, 1.0);
+            o.pair(70, if order == 0 { 1712 } else { 688 });
+            o.pair(72, 1);
+            o.pair(73, 0);
+            o.pair(74, 5);
+            o.pair(7, "");
+            o.pair(75, 16);
+            o.real(147, 1.0);
+            o.real(148, 0.0);
+            o.real(149, 0.0);
+            o.pair(100, "AcDbLayout");
+            o.pair(1, name);
+            o.pair(70, 1);
+            o.pair(71, order);
+            o.real(10, 0.0);
+            o.real(20, 0.0);
+            o.real(11, 420.0);
+            o.real(21, 297.0);
+            o.real(12, 0.0);
+            o.real(22, 0.0);
+            o.real(32, 0.0);
+            o.real(14, ext_min[0]);
+            o.real(24, ext_min[1]);
+            o.real(34, 0.0);
+            o.real(15, ext_max[0]);
+            o.real(25, ext_max[1]);
+            o.real(35, 0.0);
+            o.real(146, 0.0);
+            o.real(13, 0.0);
+            o.real(23, 0.0);
+            o.real(33, 0.0);
+            o.real(16, 1.0);
+            o.real(26, 0.0);
+            o.real(36, 0.0);
+            o.real(17, 0.0);
+            o.real(27, 1.0);
+            o.real(37, 0.0);
+            o.pair(76, 0);
+            o.pair(330, br);
+        }
+        o.pair(0, "ENDSEC");
+        o.pair(0, "EOF");
+        o.s
+    }
 }
 
 /// The DXF text of one profiled strip.
 pub fn strip_dxf(strip: &FlatStrip, profile: &StripProfile) -> String {
-    let mut body = Out {
-        s: String::new(),
-        next: FIRST_FREE,
-    };
-    // ENTITIES first (into a buffer), so the header knows the handle seed
-    contour(&mut body, LAYER_OUTSIDE, &profile.outline);
+    let mut d = Drawing::new();
+    d.polyline(LAYER_OUTSIDE, &profile.outline.0, true);
     for c in &profile.cuts {
-        contour(&mut body, LAYER_INSIDE, c);
+        d.polyline(LAYER_INSIDE, &c.0, true);
     }
-    for l in &profile.labels {
-        for s in text_strokes(&l.text, l.at, l.angle, l.height) {
-            open_line(&mut body, LAYER_ETCH, &s);
-        }
-    }
-    for f in &profile.fold_marks {
-        open_line(&mut body, LAYER_ETCH, f);
+    for s in etch_strokes(profile) {
+        d.open_line(LAYER_ETCH, &s);
     }
     for t in &profile.tiles {
-        let v: Vec<[f64; 3]> = t.iter().map(|p| [p[0], p[1], 0.0]).collect();
-        lwpolyline(&mut body, LAYER_INFO, &v, true);
+        d.polygon(LAYER_INFO, t);
     }
     for pin in &strip.pins {
         let (x, y, r) = (pin.point.x, pin.point.y, 3.0);
-        open_line(&mut body, LAYER_INFO, &[[x - r, y], [x + r, y]]);
-        open_line(&mut body, LAYER_INFO, &[[x, y - r], [x, y + r]]);
+        d.open_line(LAYER_INFO, &[[x - r, y], [x + r, y]]);
+        d.open_line(LAYER_INFO, &[[x, y - r], [x, y + r]]);
     }
     let title = format!("{} {:.0}X{:.0}", strip.id, strip.size[0], strip.size[1]);
-    for s in text_strokes(&title, [strip.size[0] / 2.0, -30.0], 0.0, 15.0) {
-        open_line(&mut body, LAYER_INFO, &s);
-    }
-    let entities = std::mem::take(&mut body.s);
-
-    let mut o = Out {
-        s: String::with_capacity(entities.len() + 8192),
-        next: 0x11,
-    };
+    d.strokes(LAYER_INFO, &title, [strip.size[0] / 2.0, -30.0], 0.0, 15.0);
     let (ext_min, ext_max) = extents(profile);
-    // HEADER
-    o.pair(0, "SECTION");
-    o.pair(2, "HEADER");
-    o.pair(9, "$ACADVER");
-    o.pair(1, "AC1015");
-    o.pair(9, "$HANDSEED");
-    o.pair(5, format!("{:X}", body.next));
-    o.pair(9, "$INSUNITS");
-    o.pair(70, 4);
-    o.pair(9, "$MEASUREMENT");
-    o.pair(70, 1);
-    o.pair(9, "$EXTMIN");
-    o.real(10, ext_min[0]);
-    o.real(20, ext_min[1]);
-    o.real(30, 0.0);
-    o.pair(9, "$EXTMAX");
-    o.real(10, ext_max[0]);
-    o.real(20, ext_max[1]);
-    o.real(30, 0.0);
-    o.pair(0, "ENDSEC");
-    o.pair(0, "SECTION");
-    o.pair(2, "CLASSES");
-    o.pair(0, "ENDSEC");
-    // TABLES
-    o.pair(0, "SECTION");
-    o.pair(2, "TABLES");
-    table_head(&mut o, "VPORT", H_VPORT_TABLE, 1);
-    record_head(&mut o, "VPORT", H_VPORT_TABLE, "AcDbViewportTableRecord");
-    o.pair(2, "*Active");
-    o.pair(70, 0);
-    for (c, v) in [(10, 0.0), (20, 0.0), (11, 1.0), (21, 1.0)] {
-        o.real(c, v);
-    }
-    o.real(12, (ext_min[0] + ext_max[0]) / 2.0);
-    o.real(22, (ext_min[1] + ext_max[1]) / 2.0);
-    o.real(40, (ext_max[1] - ext_min[1]).max(1.0) * 1.1);
-    o.real(41, 2.0);
-    o.pair(0, "ENDTAB");
-    table_head(&mut o, "LTYPE", H_LTYPE_TABLE, 3);
-    for name in ["ByBlock", "ByLayer", "Continuous"] {
-        record_head(&mut o, "LTYPE", H_LTYPE_TABLE, "AcDbLinetypeTableRecord");
-        o.pair(2, name);
-        o.pair(70, 0);
-        o.pair(
-            3,
-            if name == "Continuous" {
-                "Solid line"
-            } else {
-                ""
-            },
-        );
-        o.pair(72, 65);
-        o.pair(73, 0);
-        o.real(40, 0.0);
-    }
-    o.pair(0, "ENDTAB");
-    let layers = [
-        ("0", 7, true),
-        (LAYER_OUTSIDE, 1, true),
-        (LAYER_INSIDE, 5, true),
-        (LAYER_ETCH, 3, true),
-        (LAYER_INFO, 8, false),
-    ];
-    table_head(&mut o, "LAYER", H_LAYER_TABLE, layers.len());
-    for (name, color, plot) in layers {
-        record_head(&mut o, "LAYER", H_LAYER_TABLE, "AcDbLayerTableRecord");
-        o.pair(2, name);
-        o.pair(70, 0);
-        o.pair(62, color);
-        o.pair(6, "Continuous");
-        o.pair(290, if plot { 1 } else { 0 });
-        o.pair(370, -3);
-    }
-    o.pair(0, "ENDTAB");
-    table_head(&mut o, "STYLE", H_STYLE_TABLE, 1);
-    record_head(&mut o, "STYLE", H_STYLE_TABLE, "AcDbTextStyleTableRecord");
-    o.pair(2, "Standard");
-    o.pair(70, 0);
-    o.real(40, 0.0);
-    o.real(41, 1.0);
-    o.real(50, 0.0);
-    o.pair(71, 0);
-    o.real(42, 2.5);
-    o.pair(3, "txt");
-    o.pair(4, "");
-    o.pair(0, "ENDTAB");
-    table_head(&mut o, "VIEW", H_VIEW_TABLE, 0);
-    o.pair(0, "ENDTAB");
-    table_head(&mut o, "UCS", H_UCS_TABLE, 0);
-    o.pair(0, "ENDTAB");
-    table_head(&mut o, "APPID", H_APPID_TABLE, 1);
-    record_head(&mut o, "APPID", H_APPID_TABLE, "AcDbRegAppTableRecord");
-    o.pair(2, "ACAD");
-    o.pair(70, 0);
-    o.pair(0, "ENDTAB");
-    o.pair(0, "TABLE");
-    o.pair(2, "DIMSTYLE");
-    o.pair(5, H_DIMSTYLE_TABLE);
-    o.pair(330, "0");
-    o.pair(100, "AcDbSymbolTable");
-    o.pair(70, 1);
-    o.pair(100, "AcDbDimStyleTable");
-    o.pair(71, 0);
-    let h = o.handle();
-    o.pair(0, "DIMSTYLE");
-    o.pair(105, h);
-    o.pair(330, H_DIMSTYLE_TABLE);
-    o.pair(100, "AcDbSymbolTableRecord");
-    o.pair(100, "AcDbDimStyleTableRecord");
-    o.pair(2, "Standard");
-    o.pair(70, 0);
-    o.pair(0, "ENDTAB");
-    table_head(&mut o, "BLOCK_RECORD", H_BLOCK_RECORD_TABLE, 2);
-    for (h, name, layout) in [
-        (H_MODEL_BR, "*Model_Space", H_MODEL_LAYOUT),
-        (H_PAPER_BR, "*Paper_Space", H_PAPER_LAYOUT),
-    ] {
-        o.pair(0, "BLOCK_RECORD");
-        o.pair(5, h);
-        o.pair(330, H_BLOCK_RECORD_TABLE);
-        o.pair(100, "AcDbSymbolTableRecord");
-        o.pair(100, "AcDbBlockTableRecord");
-        o.pair(2, name);
-        o.pair(340, layout);
-    }
-    o.pair(0, "ENDTAB");
-    o.pair(0, "ENDSEC");
-    // BLOCKS
-    o.pair(0, "SECTION");
-    o.pair(2, "BLOCKS");
-    for (owner, name, paper) in [
-        (H_MODEL_BR, "*Model_Space", false),
-        (H_PAPER_BR, "*Paper_Space", true),
-    ] {
-        let h = o.handle();
-        o.pair(0, "BLOCK");
-        o.pair(5, h);
-        o.pair(330, owner);
-        o.pair(100, "AcDbEntity");
-        if paper {
-            o.pair(67, 1);
-        }
-        o.pair(8, "0");
-        o.pair(100, "AcDbBlockBegin");
-        o.pair(2, name);
-        o.pair(70, 0);
-        o.real(10, 0.0);
-        o.real(20, 0.0);
-        o.real(30, 0.0);
-        o.pair(3, name);
-        o.pair(1, "");
-        let h = o.handle();
-        o.pair(0, "ENDBLK");
-        o.pair(5, h);
-        o.pair(330, owner);
-        o.pair(100, "AcDbEntity");
-        if paper {
-            o.pair(67, 1);
-        }
-        o.pair(8, "0");
-        o.pair(100, "AcDbBlockEnd");
-    }
-    o.pair(0, "ENDSEC");
-    // ENTITIES
-    o.pair(0, "SECTION");
-    o.pair(2, "ENTITIES");
-    o.s.push_str(&entities);
-    o.pair(0, "ENDSEC");
-    // OBJECTS
-    o.pair(0, "SECTION");
-    o.pair(2, "OBJECTS");
-    o.pair(0, "DICTIONARY");
-    o.pair(5, H_ROOT_DICT);
-    o.pair(330, "0");
-    o.pair(100, "AcDbDictionary");
-    o.pair(281, 1);
-    o.pair(3, "ACAD_GROUP");
-    o.pair(350, H_GROUP_DICT);
-    o.pair(3, "ACAD_LAYOUT");
-    o.pair(350, H_LAYOUT_DICT);
-    o.pair(0, "DICTIONARY");
-    o.pair(5, H_GROUP_DICT);
-    o.pair(330, H_ROOT_DICT);
-    o.pair(100, "AcDbDictionary");
-    o.pair(281, 1);
-    o.pair(0, "DICTIONARY");
-    o.pair(5, H_LAYOUT_DICT);
-    o.pair(330, H_ROOT_DICT);
-    o.pair(100, "AcDbDictionary");
-    o.pair(281, 1);
-    o.pair(3, "Layout1");
-    o.pair(350, H_PAPER_LAYOUT);
-    o.pair(3, "Model");
-    o.pair(350, H_MODEL_LAYOUT);
-    for (h, name, order, br) in [
-        (H_MODEL_LAYOUT, "Model", 0, H_MODEL_BR),
-        (H_PAPER_LAYOUT, "Layout1", 1, H_PAPER_BR),
-    ] {
-        o.pair(0, "LAYOUT");
-        o.pair(5, h);
-        o.pair(330, H_LAYOUT_DICT);
-        o.pair(100, "AcDbPlotSettings");
-        o.pair(1, "");
-        o.pair(4, "A3");
-        o.pair(6, "");
-        for c in 40..=47 {
-            o.real(c, 0.0);
-        }
-        o.real(48, 0.0);
-        o.real(49, 0.0);
-        o.real(140, 0.0);
-        o.real(141, 0.0);
-        o.real(142, 1.0);
-        o.real(143, 1.0);
-        o.pair(70, if order == 0 { 1712 } else { 688 });
-        o.pair(72, 1);
-        o.pair(73, 0);
-        o.pair(74, 5);
-        o.pair(7, "");
-        o.pair(75, 16);
-        o.real(147, 1.0);
-        o.real(148, 0.0);
-        o.real(149, 0.0);
-        o.pair(100, "AcDbLayout");
-        o.pair(1, name);
-        o.pair(70, 1);
-        o.pair(71, order);
-        o.real(10, 0.0);
-        o.real(20, 0.0);
-        o.real(11, 420.0);
-        o.real(21, 297.0);
-        o.real(12, 0.0);
-        o.real(22, 0.0);
-        o.real(32, 0.0);
-        o.real(14, ext_min[0]);
-        o.real(24, ext_min[1]);
-        o.real(34, 0.0);
-        o.real(15, ext_max[0]);
-        o.real(25, ext_max[1]);
-        o.real(35, 0.0);
-        o.real(146, 0.0);
-        o.real(13, 0.0);
-        o.real(23, 0.0);
-        o.real(33, 0.0);
-        o.real(16, 1.0);
-        o.real(26, 0.0);
-        o.real(36, 0.0);
-        o.real(17, 0.0);
-        o.real(27, 1.0);
-        o.real(37, 0.0);
-        o.pair(76, 0);
-        o.pair(330, br);
-    }
-    o.pair(0, "ENDSEC");
-    o.pair(0, "EOF");
-    o.s
+    d.finish(ext_min, ext_max)
+}
+
+/// What a strip etches (labels and fold marks), as open polylines in the strip's frame.
+pub fn etch_strokes(profile: &StripProfile) -> Vec<Vec<[f64; 2]>> {
+    let mut out: Vec<Vec<[f64; 2]>> = profile
+        .labels
+        .iter()
+        .flat_map(|l| text_strokes(&l.text, l.at, l.angle, l.height))
+        .collect();
+    out.extend(profile.fold_marks.iter().map(|f| f.to_vec()));
+    out
 }
 
 fn extents(p: &StripProfile) -> ([f64; 2], [f64; 2]) {

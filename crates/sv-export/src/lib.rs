@@ -2,6 +2,7 @@
 //! return `String`; the caller writes files.
 //!
 //! - [`strip_dxf`]: one DXF per strip, layers `OUTSIDE`, `INSIDE`, `ETCH`, `INFO`.
+//! - [`sheet_dxf`]: one DXF per nested sheet, same writer and layers, pierce points in scrap.
 //! - [`strip_svg`]: a drawing for the fabricator (labels, fold marks, scale bar, title).
 //! - [`text_strokes`]: the built-in single-stroke font used for etched labels.
 //!
@@ -21,8 +22,10 @@
 
 mod dxf;
 mod font;
+mod sheet;
 mod svg;
 
-pub use dxf::{strip_dxf, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
+pub use dxf::{etch_strokes, strip_dxf, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
 pub use font::{has_glyph, text_strokes, text_width};
+pub use sheet::{sheet_dxf, sheet_file_stem, strip_sheet_part, SheetCaption, SheetPart};
 pub use svg::strip_svg;

@@ -1,12 +1,17 @@
 //! Minimal ASCII DXF reader for closed-contour parts.
 //!
 //! Reads `LWPOLYLINE` (with bulges), `POLYLINE`/`VERTEX`, `CIRCLE`, and chains of `LINE` and
-//! `ARC` from the ENTITIES section (any layer). Contours are nested by containment: even depth
-//! = outer contour of a part, odd depth = hole of its parent.
+//! `ARC` from the ENTITIES section. Contours are nested by containment: even depth = outer
+//! contour of a part, odd depth = hole of its parent.
+//!
+//! Layers: the plasma-shop layers `ETCH` (etched marks) and `INFO` (never cut: nominal
+//! tiles, titles, sheet outline, pierce points) are ignored, so the strip and sheet
+//! drawings of spinvalence read back as their cut contours (`OUTSIDE` outlines, `INSIDE`
+//! holes). Every other layer is read.
 
 use std::path::Path;
 
-use crate::part::{polygon_area, Contour, Part, Vertex};
+use crate::part::{point_in_polygon, polygon_area, Contour, Part, Vertex};
 use crate::NestError;
 
 /// Endpoint matching tolerance (drawing units) when chaining LINE/ARC entities.
@@ -85,6 +90,12 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
             k += 1;
         }
     }
+    let layer_of = |ent: &[(i32, &str, usize)]| {
+        ent.iter()
+            .find(|p| p.0 == 8)
+            .map_or(String::new(), |p| p.1.to_ascii_uppercase())
+    };
+    let not_cut = |layer: &str| layer == "ETCH" || layer == "INFO";
     let num = |v: &str, line: usize| -> Result<f64, NestError> {
         v.parse::<f64>()
             .ok()
@@ -98,6 +109,17 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
     while e < ents.len() {
         let ent = ents[e];
         let kind = ent[0].1;
+        if kind != "VERTEX" && kind != "SEQEND" && not_cut(&layer_of(ent)) {
+            // skip the entity (with the vertices of a POLYLINE)
+            e += 1;
+            while kind == "POLYLINE"
+                && e < ents.len()
+                && matches!(ents[e][0].1, "VERTEX" | "SEQEND")
+            {
+                e += 1;
+            }
+            continue;
+        }
         let get = |c: i32| ent.iter().find(|p| p.0 == c);
         let getf =
             |c: i32, d: f64| -> Result<f64, NestError> { get(c).map_or(Ok(d), |p| num(p.1, p.2)) };
@@ -276,21 +298,6 @@ fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Contour>, rejected: &mut 
     }
 }
 
-fn point_in(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
-    let mut inside = false;
-    let n = poly.len();
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[(i + 1) % n]);
-        if (a[1] > p[1]) != (b[1] > p[1]) {
-            let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
-            if p[0] < x {
-                inside = !inside;
-            }
-        }
-    }
-    inside
-}
-
 fn group(contours: Vec<Contour>, name: &str) -> Vec<Part> {
     let tol = 0.01;
     let flat: Vec<Vec<[f64; 2]>> = contours.iter().map(|c| c.flatten(tol)).collect();
@@ -302,7 +309,7 @@ fn group(contours: Vec<Contour>, name: &str) -> Vec<Part> {
     for (k, &c) in idx.iter().enumerate() {
         let probe = flat[c][0];
         for &o in idx[..k].iter().rev() {
-            if point_in(probe, &flat[o]) {
+            if point_in_polygon(probe, &flat[o]) {
                 parent[c] = Some(o);
                 break;
             }

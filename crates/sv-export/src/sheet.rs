@@ -1,0 +1,362 @@
+//! The DXF of a nested sheet, written by the same writer as the strips ([`crate::strip_dxf`]).
+//!
+//! Per placed part, in placement order: its inside contours (`INSIDE`), then its outside
+//! contour (`OUTSIDE`), each a closed LWPOLYLINE with bulges moved by the placement (arcs
+//! stay arcs, nothing is offset: the CAM applies the kerf), each followed by its suggested
+//! pierce point (a `POINT` on `INFO`) in scrap; then the part's etching (`ETCH`) and its
+//! label (`TEXT` on `INFO`). The sheet outline, the sheet title and the reusable offcut
+//! are on `INFO` too.
+
+use sv_nest::part::{boundary_distance, point_in_polygon, polygon_area};
+use sv_nest::{Contour, NestReport, Part, Vertex};
+use sv_strips::{FlatStrip, StripProfile};
+
+use crate::dxf::{etch_strokes, Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
+
+/// Chord tolerance (mm) for the pierce-point search.
+const FLATTEN: f64 = 0.05;
+
+/// One part as drawn on a sheet: the contours given to the nester and what it etches, in
+/// the part's own drawing frame (the frame the placements of `nest.json` map).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SheetPart {
+    /// The cut contours (`part.id` is the `strip` of the placements).
+    pub part: Part,
+    /// Etched open polylines (labels, fold marks).
+    pub etch: Vec<Vec<[f64; 2]>>,
+}
+
+impl SheetPart {
+    /// A part without etching (a DXF part read by `spinvalence nest`).
+    pub fn plain(part: Part) -> Self {
+        Self {
+            part,
+            etch: Vec::new(),
+        }
+    }
+}
+
+fn contour(c: &sv_strips::Contour) -> Contour {
+    Contour {
+        vertices: c
+            .0
+            .iter()
+            .map(|v| Vertex {
+                x: v[0],
+                y: v[1],
+                bulge: v[2],
+            })
+            .collect(),
+    }
+}
+
+/// The nesting part of a profiled strip: outline, slots as holes, labels and fold marks as
+/// etching, in the strip's frame (the coordinates of `strips/ID.dxf` and `strips.json`).
+pub fn strip_sheet_part(strip: &FlatStrip, profile: &StripProfile) -> SheetPart {
+    SheetPart {
+        part: Part {
+            id: strip.id.clone(),
+            outer: contour(&profile.outline),
+            holes: profile.cuts.iter().map(contour).collect(),
+        },
+        etch: etch_strokes(profile),
+    }
+}
+
+/// `sheet-01_3000x1500mm_t3mm` (without extension): sheet number, stock size and, when
+/// known, the material thickness, so that the file says what to load on the table.
+pub fn sheet_file_stem(index: usize, width: f64, height: f64, thickness: Option<f64>) -> String {
+    let mm = |x: f64| {
+        let s = format!("{x:.1}");
+        s.trim_end_matches(".0").to_string()
+    };
+    let mut stem = format!("sheet-{:02}_{}x{}mm", index + 1, mm(width), mm(height));
+    if let Some(t) = thickness {
+        stem.push_str(&format!("_t{}mm", mm(t)));
+    }
+    stem
+}
+
+/// What the sheet title says besides the sheet number and size.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SheetCaption {
+    /// Material thickness (mm), when known.
+    pub thickness: Option<f64>,
+    /// Who wrote the file (`spinvalence 0.1.0`).
+    pub generator: String,
+}
+
+/// A placed part in sheet coordinates with its flattened contours (for pierce points).
+struct Placed {
+    part: Part,
+    outer: Vec<[f64; 2]>,
+    holes: Vec<Vec<[f64; 2]>>,
+    lo: [f64; 2],
+    hi: [f64; 2],
+}
+
+impl Placed {
+    fn new(part: Part) -> Self {
+        let outer = part.outer.flatten(FLATTEN);
+        let holes = part.holes.iter().map(|h| h.flatten(FLATTEN)).collect();
+        let (lo, hi) = sv_nest::part::bbox(&outer);
+        Self {
+            part,
+            outer,
+            holes,
+            lo,
+            hi,
+        }
+    }
+
+    /// Whether `p` is on this part's material (inside the outline, outside every hole),
+    /// or within `clear` of its outline.
+    fn covers(&self, p: [f64; 2], clear: f64) -> bool {
+        if p[0] < self.lo[0] - clear
+            || p[1] < self.lo[1] - clear
+            || p[0] > self.hi[0] + clear
+            || p[1] > self.hi[1] + clear
+        {
+            return false;
+        }
+        if boundary_distance(p, &self.outer) < clear {
+            return true;
+        }
+        point_in_polygon(p, &self.outer) && !self.holes.iter().any(|h| point_in_polygon(p, h))
+    }
+}
+
+/// The point inside the closed polygon `poly` farthest from its boundary (searched on a
+/// grid, then refined around the best point), and that distance.
+fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
+    let (lo, hi) = sv_nest::part::bbox(poly);
+    let mut best = ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], -1.0);
+    let (mut c, mut half) = (best.0, [(hi[0] - lo[0]) / 2.0, (hi[1] - lo[1]) / 2.0]);
+    const N: usize = 24;
+    for _ in 0..6 {
+        for i in 0..=N {
+            for j in 0..=N {
+                let p = [
+                    c[0] - half[0] + 2.0 * half[0] * i as f64 / N as f64,
+                    c[1] - half[1] + 2.0 * half[1] * j as f64 / N as f64,
+                ];
+                if point_in_polygon(p, poly) {
+                    let d = boundary_distance(p, poly);
+                    if d > best.1 {
+                        best = (p, d);
+                    }
+                }
+            }
+        }
+        c = best.0;
+        half = [half[0] * 4.0 / N as f64, half[1] * 4.0 / N as f64];
+    }
+    best
+}
+
+/// A pierce point in scrap for the outside contour of `parts[k]`: `offset` outside the
+/// outline (half the spacing: midway to any neighbour), at the middle of the longest
+/// straight edge where that is clear of every part and inside the sheet, else the clearest
+/// candidate.
+fn outside_pierce(parts: &[Placed], k: usize, offset: f64, sheet: [f64; 2]) -> [f64; 2] {
+    let me = &parts[k];
+    let ccw = polygon_area(&me.outer) > 0.0;
+    let v = &me.part.outer.vertices;
+    let n = v.len();
+    // candidate edges: straight ones first, longest first; then every flattened edge
+    let mut edges: Vec<([f64; 2], [f64; 2], bool)> = (0..n)
+        .map(|i| {
+            let (a, b) = (v[i], v[(i + 1) % n]);
+            ([a.x, a.y], [b.x, b.y], a.bulge == 0.0)
+        })
+        .collect();
+    let m = me.outer.len();
+    edges.extend((0..m).map(|i| (me.outer[i], me.outer[(i + 1) % m], true)));
+    edges.retain(|e| e.2 && (e.1[0] - e.0[0]).hypot(e.1[1] - e.0[1]) > 1e-6);
+    edges.sort_by(|x, y| {
+        let l = |e: &([f64; 2], [f64; 2], bool)| (e.1[0] - e.0[0]).hypot(e.1[1] - e.0[1]);
+        l(y).total_cmp(&l(x))
+    });
+    let mut best = ([me.lo[0] - offset, me.lo[1] - offset], f64::NEG_INFINITY);
+    for (a, b, _) in edges {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let len = dx.hypot(dy);
+        // outward normal of a counter-clockwise outline is the edge direction turned right
+        let s = if ccw { 1.0 } else { -1.0 };
+        let nrm = [s * dy / len, -s * dx / len];
+        let p = [
+            (a[0] + b[0]) / 2.0 + offset * nrm[0],
+            (a[1] + b[1]) / 2.0 + offset * nrm[1],
+        ];
+        if p[0] < 0.0 || p[1] < 0.0 || p[0] > sheet[0] || p[1] > sheet[1] {
+            continue;
+        }
+        if point_in_polygon(p, &me.outer) {
+            continue;
+        }
+        // clearance: distance to the nearest material of any part (own outline included)
+        let clear = parts
+            .iter()
+            .map(|q| {
+                if q.covers(p, 0.0) {
+                    0.0
+                } else {
+                    boundary_distance(p, &q.outer)
+                }
+            })
+            .fold(f64::INFINITY, f64::min);
+        if clear >= 0.9 * offset {
+            return p;
+        }
+        if clear > best.1 {
+            best = (p, clear);
+        }
+    }
+    best.0
+}
+
+/// The DXF text of sheet `index` of `report`. `parts` holds every nested part (looked up
+/// by id). An outline's pierce point sits half the spacing outside it (midway to the
+/// nearest neighbour); a hole's at the point of the hole farthest from its edge.
+pub fn sheet_dxf(
+    report: &NestReport,
+    index: usize,
+    parts: &[SheetPart],
+    caption: &SheetCaption,
+) -> Result<String, String> {
+    let sheet = report.sheets.get(index).ok_or_else(|| {
+        format!(
+            "sheet {} of {}: no such sheet",
+            index + 1,
+            report.sheets.len()
+        )
+    })?;
+    let (w, h) = (sheet.width, sheet.height);
+    let mut placed = Vec::with_capacity(sheet.placements.len());
+    let mut etch = Vec::with_capacity(sheet.placements.len());
+    for pl in &sheet.placements {
+        let sp = parts
+            .iter()
+            .find(|p| p.part.id == pl.strip)
+            .ok_or_else(|| {
+                format!(
+                    "sheet {}: part {:?} is not among the parts",
+                    index + 1,
+                    pl.strip
+                )
+            })?;
+        let (s, c) = pl.rotation_deg.to_radians().sin_cos();
+        let t = pl.translation;
+        let moved: Vec<Vec<[f64; 2]>> = sp
+            .etch
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .map(|p| [c * p[0] - s * p[1] + t[0], s * p[0] + c * p[1] + t[1]])
+                    .collect()
+            })
+            .collect();
+        placed.push(Placed::new(sp.part.transformed(pl.rotation_deg, t)));
+        etch.push(moved);
+    }
+    let offset = (report.sheet.spacing / 2.0).max(0.5);
+    let mut d = Drawing::new();
+    d.polygon(LAYER_INFO, &[[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]]);
+    for (k, p) in placed.iter().enumerate() {
+        for (hole, flat) in p.part.holes.iter().zip(&p.holes) {
+            d.polyline(LAYER_INSIDE, &bulged(hole), true);
+            d.point(LAYER_INFO, deepest_point(flat).0);
+        }
+        d.polyline(LAYER_OUTSIDE, &bulged(&p.part.outer), true);
+        d.point(LAYER_INFO, outside_pierce(&placed, k, offset, [w, h]));
+        for l in &etch[k] {
+            d.open_line(LAYER_ETCH, l);
+        }
+        let size = (p.hi[1] - p.lo[1]).min(p.hi[0] - p.lo[0]);
+        let th = (size / 3.0).clamp(5.0, 40.0);
+        let label = &p.part.id;
+        let at = [
+            (p.lo[0] + p.hi[0]) / 2.0 - 0.3 * th * label.chars().count() as f64,
+            (p.lo[1] + p.hi[1]) / 2.0 - th / 2.0,
+        ];
+        d.text(LAYER_INFO, label, at, th);
+    }
+    if let Some(o) = report.offcut.as_ref().filter(|o| o.sheet == index) {
+        let (x0, y0, x1, y1) = (o.x, o.y, o.x + o.width, o.y + o.height);
+        d.polygon(LAYER_INFO, &[[x0, y0], [x1, y0], [x1, y1], [x0, y1]]);
+        d.text(
+            LAYER_INFO,
+            &format!("OFFCUT {:.0} x {:.0} mm", o.width, o.height),
+            [x0 + 20.0, y1 - 60.0],
+            30.0,
+        );
+    }
+    let mut title = format!(
+        "SHEET {} OF {}  {:.0} x {:.0} mm",
+        index + 1,
+        report.sheets.len(),
+        w,
+        h
+    );
+    if let Some(t) = caption.thickness {
+        title.push_str(&format!("  t = {t} mm"));
+    }
+    title.push_str(&format!(
+        "  {} parts  {:.1} % used  spacing {} mm  margin {} mm",
+        sheet.placements.len(),
+        100.0 * sheet.utilisation,
+        report.sheet.spacing,
+        report.sheet.margin
+    ));
+    if !caption.generator.is_empty() {
+        title.push_str(&format!("  {}", caption.generator));
+    }
+    d.text(LAYER_INFO, &title, [0.0, -60.0], 30.0);
+    Ok(d.finish([-10.0, -80.0], [w + 10.0, h + 10.0]))
+}
+
+fn bulged(c: &Contour) -> Vec<[f64; 3]> {
+    c.vertices.iter().map(|v| [v.x, v.y, v.bulge]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn file_stem_names_sheet_size_and_thickness() {
+        assert_eq!(
+            sheet_file_stem(0, 3000.0, 1500.0, Some(3.0)),
+            "sheet-01_3000x1500mm_t3mm"
+        );
+        assert_eq!(
+            sheet_file_stem(11, 2500.0, 1250.5, Some(2.5)),
+            "sheet-12_2500x1250.5mm_t2.5mm"
+        );
+        assert_eq!(
+            sheet_file_stem(1, 3000.0, 1500.0, None),
+            "sheet-02_3000x1500mm"
+        );
+    }
+
+    #[test]
+    fn deepest_point_of_a_slot_is_on_its_axis() {
+        let slot = [[0.0, 0.0], [40.0, 0.0], [40.0, 4.0], [0.0, 4.0]];
+        let (p, d) = deepest_point(&slot);
+        assert!(
+            (p[1] - 2.0).abs() < 0.05 && (d - 2.0).abs() < 0.05,
+            "{p:?} {d}"
+        );
+        // an L: the deepest point is inside the L, not at the bbox centre (outside it)
+        let l = [
+            [0.0, 0.0],
+            [50.0, 0.0],
+            [50.0, 10.0],
+            [10.0, 10.0],
+            [10.0, 50.0],
+            [0.0, 50.0],
+        ];
+        let (p, d) = deepest_point(&l);
+        assert!(point_in_polygon(p, &l) && d > 4.9, "{p:?} {d}");
+    }
+}
