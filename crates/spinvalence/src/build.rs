@@ -13,13 +13,14 @@ use crate::cli::BuildArgs;
 use crate::config::{self, BuildConfig};
 use crate::output::{self, number, AtomicDir, AtomicFiles};
 use crate::solve::{progress_bar, seconds};
-use crate::{report, strips};
+use crate::{report, sheets, strips};
 
 /// The files `build` writes beside `strips/`; `frame.json` last.
-const FILES: [&str; 8] = [
+const FILES: [&str; 9] = [
     "mesh.obj",
     "frame.obj",
     "strips.json",
+    "nest.json",
     "bom.csv",
     "report.html",
     "timings.json",
@@ -36,6 +37,8 @@ pub struct Timings {
     pub primary: f64,
     /// Strips: unrolling, cut profiles, design-rule check, DXF and SVG.
     pub strips: f64,
+    /// Nesting the strips onto sheets, sheet DXF and SVG.
+    pub nest: f64,
     /// The report: report.html and bom.csv.
     pub report: f64,
     /// The whole command, reading and writing included.
@@ -69,6 +72,9 @@ pub fn resolve(args: &BuildArgs) -> Result<BuildConfig> {
     if let Some(direction) = args.strip_direction {
         cfg.strips.direction = direction;
     }
+    if let Some(s) = args.nest_seconds {
+        cfg.nest.seconds = s;
+    }
     let size = cfg.secondary.unit_size;
     if !(size.is_finite() && size > 0.0) {
         bail!("invalid unit size {size}: must be a positive length in mm");
@@ -79,6 +85,7 @@ pub fn resolve(args: &BuildArgs) -> Result<BuildConfig> {
     cfg.profile
         .validate()
         .map_err(|e| anyhow!("profile: {e}"))?;
+    cfg.nest.to_options(cfg.profile.kerf)?;
     Ok(cfg)
 }
 
@@ -103,8 +110,10 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     let solve_options = cfg.primary.to_solve_options()?;
     let target = load_target(&cfg.target)?;
     let strip_options = cfg.strips.to_options()?;
+    let nest_options = cfg.nest.to_options(cfg.profile.kerf)?;
     let files = AtomicFiles::create(&cfg.out, &FILES)?;
     let strips_dir = AtomicDir::create(&cfg.out, "strips")?;
+    let sheets_dir = AtomicDir::create(&cfg.out, "sheets")?;
 
     let t0 = Instant::now();
     let bar = progress_bar(args.quiet, cfg.secondary.max_iterations, "hub mesh");
@@ -137,8 +146,34 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     let strips_s = t2.elapsed().as_secs_f64();
 
     let t3 = Instant::now();
-    let report_stage = report::run(&cfg.target, &frame, &stage.file, None, &report)?;
-    let report_s = t3.elapsed().as_secs_f64();
+    let parts: Vec<sv_export::SheetPart> = stage
+        .strips
+        .iter()
+        .zip(&stage.profiles)
+        .map(|(s, p)| sv_export::strip_sheet_part(s, p))
+        .collect();
+    let nested = sheets::run(
+        &parts,
+        &nest_options,
+        Some(cfg.profile.thickness),
+        args.quiet,
+    )?;
+    if let Some(l) = nested.report.left_out.first() {
+        bail!("nesting: strip {} was left out: {}", l.part, l.reason);
+    }
+    for (name, text) in &nested.drawings {
+        sheets_dir.write(name, text)?;
+    }
+    let nest_json = serde_json::to_string_pretty(&nested.report)?;
+    let nest_s = t3.elapsed().as_secs_f64();
+
+    let t4 = Instant::now();
+    let nest_input = sv_report::NestInput {
+        report: &nested.report,
+        sheet_files: &nested.sheet_files,
+    };
+    let report_stage = report::run(&cfg.target, &frame, &stage.file, Some(nest_input), &report)?;
+    let report_s = t4.elapsed().as_secs_f64();
 
     let header = format!("spinvalence hub mesh of {}, mm, Z up", cfg.target);
     let mesh_obj = sv_io::write_quad_obj(&mesh, &header);
@@ -149,21 +184,25 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         secondary: secondary_s,
         primary: primary_s,
         strips: strips_s,
+        nest: nest_s,
         report: report_s,
         total: started.elapsed().as_secs_f64(),
     };
     let timings_json = serde_json::to_string_pretty(&timings)?;
     let strips_path = strips_dir.commit()?;
+    let sheets_path = sheets_dir.commit()?;
     let mut written = files.commit(&[
         &mesh_obj,
         &frame_obj,
         &strips_json,
+        &nest_json,
         &report_stage.bom,
         &report_stage.html,
         &timings_json,
         &report_json,
         &frame_json,
     ])?;
+    written.insert(0, sheets_path.join(""));
     written.insert(0, strips_path.join(""));
 
     if !args.quiet {
@@ -186,6 +225,10 @@ pub fn run(args: &BuildArgs) -> Result<()> {
                 ),
             ],
         );
+        let at = rows.len() - 2;
+        for (k, row) in sheets::summary_rows(&nested.report).into_iter().enumerate() {
+            rows.insert(at + k, row);
+        }
         let report_path = cfg.out.join("report.html").display().to_string();
         let at = rows.len() - 2;
         for (k, row) in report::summary_rows(&report_stage, &report_path)
@@ -266,10 +309,10 @@ fn summary_rows(
             format!("{} .. {}", mm(overlap.0), mm(overlap.1)),
         ],
         [
-            "time secondary / primary / strips / report".into(),
+            "time secondary / primary / strips / nest / report".into(),
             format!(
-                "{:.3} s / {:.3} s / {:.3} s / {:.3} s",
-                t.secondary, t.primary, t.strips, t.report
+                "{:.3} s / {:.3} s / {:.3} s / {:.3} s / {:.3} s",
+                t.secondary, t.primary, t.strips, t.nest, t.report
             ),
         ],
         [

@@ -74,7 +74,8 @@ Examples:
 
 Built-in targets: builtin:flat, builtin:vault, builtin:dome, builtin:saddle, builtin:pavilion.
 Writes DIR/mesh.obj (hub mesh), frame.json, frame.obj, strips.json, strips/ (one DXF and one
-SVG per strip), report.html (the build report: open it in a browser, it needs no network),
+SVG per strip), nest.json and sheets/ (the strips nested on plasma sheets: one DXF and one
+SVG per sheet), report.html (the build report: open it in a browser, it needs no network),
 bom.csv (one row per strip), report.json and timings.json, all or nothing.
 `spinvalence build --print-config` prints a config file with every default.";
 
@@ -89,7 +90,9 @@ Examples:
   # a strip-packing benchmark instance (jagua-rs JSON)
   spinvalence nest ../shared/datasets/nesting/spp/fu.json --nest-seconds 60 --out out/fu
 
-Writes DIR/nest.json and DIR/sheets/sheet-NN.svg (or DIR/strip.json for an instance).
+Writes DIR/nest.json and, per sheet, DIR/sheets/sheet-NN_WxHmm[_tTmm].dxf (layers OUTSIDE,
+INSIDE, ETCH, INFO; pierce points and labels on INFO) and .svg (or DIR/strip.json for an
+instance).
 Parts that cannot be nested (open or self-intersecting contours, larger than every sheet,
 unreadable files) are listed as left out; the others still nest. Same seed, same layout
 for the same budget.";
@@ -136,6 +139,9 @@ pub struct NestArgs {
     /// Random seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Material thickness (mm), for the sheet file names and titles.
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    pub thickness: Option<f64>,
     /// Output directory.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -168,6 +174,9 @@ pub struct BuildArgs {
     /// Mesh direction of the strips: u (along side 0 of unit 0) or v (default u).
     #[arg(long, value_name = "u|v", value_parser = parse_direction)]
     pub strip_direction: Option<sv_strips::StripDirection>,
+    /// Time budget of the nesting in seconds (default 5; the best layout so far is kept).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub nest_seconds: Option<f64>,
     /// Print a config file with every default and exit.
     #[arg(long)]
     pub print_config: bool,

@@ -19,6 +19,10 @@
 //! [profile]                     # cut profile (sv_strips::ProfileParams), mm
 //! thickness = 3.0
 //! kerf = 1.3
+//!
+//! [nest]                        # the strips on plasma sheets (sv_nest::NestOptions)
+//! sheets = ["3000x1500"]
+//! seconds = 5.0
 //! ```
 //!
 //! Unknown keys are errors (a typo must not silently fall back to a default). Command-line
@@ -51,6 +55,83 @@ pub struct BuildConfig {
     pub strips: StripsConfig,
     /// Cut profile of every part (mm).
     pub profile: ProfileParams,
+    /// Nesting of the strips onto sheets.
+    pub nest: NestConfig,
+}
+
+/// `[nest]`: the strips on plasma sheets. The part spacing is the profile's kerf plus
+/// `clearance`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct NestConfig {
+    /// Stock sheet sizes `WIDTHxHEIGHT` (mm), in order of preference.
+    pub sheets: Vec<String>,
+    /// Clear border along every sheet edge (mm).
+    pub margin: f64,
+    /// Distance between parts beyond the kerf (mm).
+    pub clearance: f64,
+    /// Any rotation instead of 0 and 180 degrees.
+    pub free_rotation: bool,
+    /// Time budget of the nesting (s); the best layout so far is kept.
+    pub seconds: f64,
+    /// Random seed (same seed and budget, same layout on the same machine).
+    pub seed: u64,
+}
+
+/// Default time budget of the nesting stage of `build` (s).
+pub const DEFAULT_NEST_SECONDS: f64 = 5.0;
+
+impl Default for NestConfig {
+    fn default() -> Self {
+        let d = sv_nest::NestOptions::default();
+        Self {
+            sheets: d
+                .sheets
+                .iter()
+                .map(|s| format!("{}x{}", s.width, s.height))
+                .collect(),
+            margin: d.margin,
+            clearance: 4.7,
+            free_rotation: false,
+            seconds: DEFAULT_NEST_SECONDS,
+            seed: 0,
+        }
+    }
+}
+
+impl NestConfig {
+    /// The nesting options for parts cut with `kerf` (mm), checked (one line naming the key).
+    pub fn to_options(&self, kerf: f64) -> Result<sv_nest::NestOptions> {
+        if self.sheets.is_empty() {
+            bail!("invalid nest.sheets: name at least one sheet size, e.g. [\"3000x1500\"]");
+        }
+        let sheets = crate::nest::parse_sheets(&self.sheets.join(","))
+            .map_err(|e| anyhow!("nest.sheets: {e}"))?;
+        for (key, v) in [("margin", self.margin), ("clearance", self.clearance)] {
+            if !(v.is_finite() && v >= 0.0) {
+                bail!("invalid nest.{key} {v}: must be a finite length >= 0 mm");
+            }
+        }
+        if !(self.seconds.is_finite() && self.seconds > 0.0 && self.seconds <= 86_400.0) {
+            bail!(
+                "invalid nest.seconds {}: must be > 0 and at most a day",
+                self.seconds
+            );
+        }
+        Ok(sv_nest::NestOptions {
+            sheets,
+            margin: self.margin,
+            spacing: kerf + self.clearance,
+            rotations: if self.free_rotation {
+                sv_nest::RotationMode::Continuous
+            } else {
+                sv_nest::RotationMode::default()
+            },
+            seed: self.seed,
+            time_limit: std::time::Duration::from_secs_f64(self.seconds),
+            ..sv_nest::NestOptions::default()
+        })
+    }
 }
 
 /// `[strips]`: how the units are partitioned into strips.
@@ -95,6 +176,7 @@ impl Default for BuildConfig {
             primary: PrimaryConfig::default(),
             strips: StripsConfig::default(),
             profile: ProfileParams::default(),
+            nest: NestConfig::default(),
         }
     }
 }

@@ -12,6 +12,7 @@ mod nest;
 mod output;
 mod report;
 mod serve;
+mod sheets;
 mod solve;
 mod strips;
 

@@ -5,11 +5,12 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Result};
+use sv_export::SheetPart;
 use sv_nest::sheets::LeftOut;
 use sv_nest::{NestOptions, Part, RotationMode, StockSheet, StripInstance, StripOptions};
 
 use crate::cli::NestArgs;
-use crate::output::{self, number, AtomicFiles};
+use crate::output::{self, number, AtomicDir, AtomicFiles};
 use crate::solve::{progress_bar, seconds};
 
 /// Parse `3000x1500` (mm); several sizes separated by commas are stock sizes in order.
@@ -105,7 +106,13 @@ pub fn run(args: &NestArgs) -> Result<()> {
             .map_or("no closed contours".to_string(), |l| l.reason.clone());
         bail!("nothing to nest: {why}");
     }
+    if let Some(t) = args.thickness {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("invalid --thickness {t}: must be a positive length in mm");
+        }
+    }
     let files = AtomicFiles::create(&args.out, &["nest.json"])?;
+    let sheet_dir = AtomicDir::create(&args.out, "sheets")?;
     let options = NestOptions {
         sheets,
         margin: args.margin,
@@ -120,41 +127,19 @@ pub fn run(args: &NestArgs) -> Result<()> {
         ..NestOptions::default()
     };
     let started = Instant::now();
-    let bar = progress_bar(args.quiet, args.nest_seconds.ceil() as usize, "nesting");
-    let report = sv_nest::nest_sheets(&parts, &options, &mut |p| {
-        bar.set_position(p.elapsed_s as u64);
-        bar.set_message(format!(
-            "{} sheet(s), {:.1} % used",
-            p.best,
-            100.0 * p.density
-        ));
-    });
-    bar.finish_and_clear();
-    let mut report = report.map_err(|e| anyhow!("{e}"))?;
-    report.left_out.extend(left_out);
-    let sheet_dir = args.out.join("sheets");
-    std::fs::create_dir_all(&sheet_dir)
-        .map_err(|e| anyhow!("{}: {}", sheet_dir.display(), output::io_message(&e)))?;
-    for i in 0..report.sheets.len() {
-        let svg = sv_nest::svg::sheet_svg(&report, &parts, i, sv_nest::DEFAULT_FLATTEN_TOLERANCE);
-        let path = sheet_dir.join(format!("sheet-{:02}.svg", i + 1));
-        std::fs::write(&path, svg)
-            .map_err(|e| anyhow!("{}: {}", path.display(), output::io_message(&e)))?;
+    let parts: Vec<SheetPart> = parts.into_iter().map(SheetPart::plain).collect();
+    let mut stage = crate::sheets::run(&parts, &options, args.thickness, args.quiet)?;
+    stage.report.left_out.extend(left_out);
+    let report = &stage.report;
+    for (name, text) in &stage.drawings {
+        sheet_dir.write(name, text)?;
     }
-    let json = serde_json::to_string_pretty(&report)?;
+    let json = serde_json::to_string_pretty(report)?;
+    sheet_dir.commit()?;
     files.commit(&[&json])?;
     if !args.quiet {
-        let mut rows: Vec<Vec<String>> = vec![
-            vec!["parts".into(), parts.len().to_string()],
-            vec![
-                "sheets".into(),
-                format!(
-                    "{} (lower bound {})",
-                    report.sheets.len(),
-                    report.lower_bound_sheets
-                ),
-            ],
-        ];
+        let mut rows: Vec<Vec<String>> = vec![vec!["parts".into(), parts.len().to_string()]];
+        rows.extend(crate::sheets::summary_rows(report));
         for (i, s) in report.sheets.iter().enumerate() {
             rows.push(vec![
                 format!("sheet {}", i + 1),
@@ -164,9 +149,6 @@ pub fn run(args: &NestArgs) -> Result<()> {
                     100.0 * s.utilisation
                 ),
             ]);
-        }
-        for l in &report.left_out {
-            rows.push(vec!["left out".into(), format!("{}: {}", l.part, l.reason)]);
         }
         rows.push(vec!["wall time".into(), seconds(started.elapsed())]);
         output::print_out(&output::table(&rows))?;

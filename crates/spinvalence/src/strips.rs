@@ -12,6 +12,8 @@ pub struct StripsStage {
     pub file: StripsFile,
     /// Unrolled strips, in file order.
     pub strips: Vec<FlatStrip>,
+    /// Cut profile of each strip.
+    pub profiles: Vec<StripProfile>,
     /// `(file name, text)` of every strip's DXF and SVG, for `DIR/strips/`.
     pub drawings: Vec<(String, String)>,
     /// Largest bend and twist any pin takes up (rad).
@@ -89,6 +91,7 @@ pub fn run(
     Ok(StripsStage {
         file,
         strips,
+        profiles,
         drawings,
         worst_pin,
     })

@@ -132,8 +132,8 @@ fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
     let (lo, hi) = sv_nest::part::bbox(poly);
     let mut best = ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], -1.0);
     let (mut c, mut half) = (best.0, [(hi[0] - lo[0]) / 2.0, (hi[1] - lo[1]) / 2.0]);
-    const N: usize = 24;
-    for _ in 0..6 {
+    const N: usize = 16;
+    for _ in 0..5 {
         for i in 0..=N {
             for j in 0..=N {
                 let p = [

@@ -91,6 +91,10 @@ pub struct StockSheet {
     pub height: f64,
 }
 
+/// Largest area growth (ratio) when jagua-rs simplifies an outline for collision checks;
+/// simplification only adds area, so spacing still holds.
+const SIMPLIFY_TOLERANCE: f32 = 0.001;
+
 /// Options of [`nest_sheets`].
 #[derive(Clone, Debug)]
 pub struct NestOptions {
@@ -285,6 +289,8 @@ pub fn nest_sheets(
             "margin and spacing must be >= 0, flatten tolerance > 0".into(),
         ));
     }
+    // the clock starts here: preparing the parts (outlines, surrogates) is part of the budget
+    let mut budget = Budget::new(opts.time_limit, opts.max_evaluations);
     let range = opts.rotations.range()?;
     let (m, s) = (opts.margin, opts.spacing);
     let grow = s / 2.0 + opts.flatten_tolerance + 1e-3 + s * 1e-3;
@@ -301,28 +307,18 @@ pub fn nest_sheets(
             )
         })
         .collect();
-    let mut left_out = Vec::new();
-    let mut prepared = Vec::new();
-    let mut lb_sizes = Vec::new();
-    for (pi, part) in parts.iter().enumerate() {
+    // outlines, collision shapes and surrogates: the costly part of the set-up, so it runs
+    // on every core; results are gathered in part order (deterministic)
+    let prepare = |pi: usize| -> Result<(Prepared, f64), LeftOut> {
+        let part = &parts[pi];
         let bad = |reason: String| LeftOut {
             part: part.id.clone(),
             reason,
         };
-        let pts = match part.validated_outline(opts.flatten_tolerance) {
-            Ok(p) => p,
-            Err(e) => {
-                left_out.push(bad(e.to_string()));
-                continue;
-            }
-        };
-        let shape = match to_spolygon(&pts) {
-            Ok(sp) => sp,
-            Err(e) => {
-                left_out.push(bad(format!("part {}: {e}", part.id)));
-                continue;
-            }
-        };
+        let pts = part
+            .validated_outline(opts.flatten_tolerance)
+            .map_err(|e| bad(e.to_string()))?;
+        let shape = to_spolygon(&pts).map_err(|e| bad(format!("part {}: {e}", part.id)))?;
         let pre = centering_transformation(&shape);
         let (cx, cy) = pre.translation();
         let orig = OriginalShape {
@@ -331,13 +327,15 @@ pub fn nest_sheets(
             modify_mode: ShapeModifyMode::Inflate,
             modify_config: ShapeModifyConfig {
                 offset: Some(grow as f32),
+                // conservative (the outline only grows): 0.1 % of the area at most
+                simplify_tolerance: Some(SIMPLIFY_TOLERANCE),
                 ..ShapeModifyConfig::default()
             },
         };
         let item = AllowedOrientations::new(range.clone(), vec![])
             .and_then(|ao| {
                 Item::new(
-                    prepared.len(),
+                    pi,
                     pi as u64,
                     orig,
                     ao,
@@ -345,14 +343,8 @@ pub fn nest_sheets(
                     CDE_CONFIG.item_surrogate_config,
                 )
             })
-            .map(Arc::new);
-        let item = match item {
-            Ok(i) => i,
-            Err(e) => {
-                left_out.push(bad(format!("part {}: {e:#}", part.id)));
-                continue;
-            }
-        };
+            .map(Arc::new)
+            .map_err(|e| bad(format!("part {}: {e:#}", part.id)))?;
         // fits some sheet in some rotation?
         let rots: Vec<f32> = match &range {
             RotationRange::None => vec![0.0],
@@ -368,13 +360,12 @@ pub fn nest_sheets(
         });
         if !fits {
             let (lo, hi) = crate::part::bbox(&pts);
-            left_out.push(bad(NestError::TooLarge {
+            return Err(bad(NestError::TooLarge {
                 part: part.id.clone(),
                 width: hi[0] - lo[0] + s,
                 height: hi[1] - lo[1] + s,
             }
             .to_string()));
-            continue;
         }
         let area = polygon_area(&pts).abs();
         let lb_area = if s > 0.0 {
@@ -384,13 +375,49 @@ pub fn nest_sheets(
         } else {
             area
         };
-        lb_sizes.push(lb_area);
-        prepared.push(Prepared {
+        let p = Prepared {
             part: pi,
             item,
             centre: [-f64::from(cx), -f64::from(cy)],
             area,
-        });
+        };
+        Ok((p, lb_area))
+    };
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .clamp(1, parts.len().max(1));
+    let mut results: Vec<Option<Result<(Prepared, f64), LeftOut>>> =
+        (0..parts.len()).map(|_| None).collect();
+    std::thread::scope(|scope| {
+        let prepare = &prepare;
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                scope.spawn(move || {
+                    (t..parts.len())
+                        .step_by(threads)
+                        .map(|pi| (pi, prepare(pi)))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        for h in handles {
+            // a panic in a worker is a bug; re-raise it here
+            for (pi, r) in h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)) {
+                results[pi] = Some(r);
+            }
+        }
+    });
+    let mut left_out = Vec::new();
+    let mut prepared = Vec::new();
+    let mut lb_sizes = Vec::new();
+    for r in results.into_iter().flatten() {
+        match r {
+            Ok((p, lb_area)) => {
+                lb_sizes.push(lb_area);
+                prepared.push(p);
+            }
+            Err(l) => left_out.push(l),
+        }
     }
     let cap = usable
         .iter()
@@ -400,7 +427,6 @@ pub fn nest_sheets(
     let lb = lbs.area.max(lbs.martello_toth);
 
     let mut rng = Rng64::seed_from_u64(opts.seed);
-    let mut budget = Budget::new(opts.time_limit, opts.max_evaluations);
     let mut order: Vec<usize> = (0..prepared.len()).collect();
     let key = |p: &Prepared| {
         let sh = p.item.shape_cd();
