@@ -74,6 +74,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
     let sheets = parse_sheets(&args.sheet)?;
     let mut parts: Vec<Part> = Vec::new();
     let mut left_out: Vec<LeftOut> = Vec::new();
+    let mut stems: Vec<String> = Vec::new();
     for path in &args.parts {
         let name = path.display().to_string();
         let text = match output::read_bytes(path) {
@@ -86,7 +87,15 @@ pub fn run(args: &NestArgs) -> Result<()> {
                 continue;
             }
         };
-        match sv_nest::dxf::parse_parts(&text, &name) {
+        // the part id is the file stem (`A01` for `strips/A01.dxf`), or the path when two
+        // files share a stem
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .filter(|s| !stems.contains(s) && !s.is_empty())
+            .unwrap_or_else(|| name.clone());
+        stems.push(stem.clone());
+        match sv_nest::dxf::parse_parts(&text, &stem) {
             Ok(read) => {
                 parts.extend(read.parts);
                 left_out.extend(read.rejected.into_iter().map(|e| LeftOut {

@@ -1,14 +1,16 @@
 """Open every DXF given on the command line with ezdxf, run its auditor and fail on errors.
 
 Also checks what the shop relies on: R2000, $INSUNITS = 4 (mm), the four layers, closed
-LWPOLYLINEs on OUTSIDE/INSIDE, and INFO never plotted.
+LWPOLYLINEs on OUTSIDE/INSIDE, and INFO never plotted. With `--sheets` first, the files are
+nested sheets: one or more outlines, a POINT (pierce point) on INFO per cut contour and a
+TEXT label on INFO per part plus the sheet title.
 """
 import sys
 
 import ezdxf
 
 
-def check(path):
+def check(path, sheets):
     problems = []
     doc = ezdxf.readfile(path)
     auditor = doc.audit()
@@ -26,7 +28,16 @@ def check(path):
     msp = doc.modelspace()
     outside = msp.query('LWPOLYLINE[layer=="OUTSIDE"]')
     inside = msp.query('LWPOLYLINE[layer=="INSIDE"]')
-    if len(outside) != 1:
+    if sheets:
+        if len(outside) < 1:
+            problems.append("no outlines on the sheet")
+        points = msp.query('POINT[layer=="INFO"]')
+        if len(points) != len(outside) + len(inside):
+            problems.append(f"{len(points)} pierce points for {len(outside) + len(inside)} contours")
+        texts = msp.query('TEXT[layer=="INFO"]')
+        if len(texts) < len(outside) + 1:
+            problems.append(f"{len(texts)} labels for {len(outside)} parts and the title")
+    elif len(outside) != 1:
         problems.append(f"{len(outside)} outlines, expected 1")
     for e in list(outside) + list(inside):
         if not e.closed:
@@ -40,12 +51,16 @@ def check(path):
 
 def main():
     failed = False
-    for path in sys.argv[1:]:
-        problems = check(path)
+    args = sys.argv[1:]
+    sheets = bool(args) and args[0] == "--sheets"
+    if sheets:
+        args = args[1:]
+    for path in args:
+        problems = check(path, sheets)
         for p in problems:
             print(f"{path}: {p}")
         failed |= bool(problems)
-    print(f"audited {len(sys.argv) - 1} file(s)")
+    print(f"audited {len(args)} file(s)")
     sys.exit(1 if failed else 0)
 
 

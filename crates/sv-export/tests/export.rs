@@ -96,13 +96,18 @@ fn every_strip_dxf_passes_the_ezdxf_audit() {
         std::fs::write(&path, dxf).unwrap();
         files.push(path);
     }
+    audit(&files, false);
+}
+
+fn audit(files: &[PathBuf], sheets: bool) -> String {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/audit_dxf.py");
-    let out = Command::new(venv_python())
-        .arg(script)
-        .args(&files)
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
+    let mut cmd = Command::new(venv_python());
+    cmd.arg(script);
+    if sheets {
+        cmd.arg("--sheets");
+    }
+    let out = cmd.args(files).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
         out.status.success(),
         "{text}{}",
@@ -112,6 +117,65 @@ fn every_strip_dxf_passes_the_ezdxf_audit() {
         text.contains(&format!("audited {} file(s)", files.len())),
         "{text}"
     );
+    text
+}
+
+/// The strips nested onto sheets (a fixed evaluation budget: the same layout every run),
+/// each sheet written as DXF: ezdxf's audit is clean, and reading the sheet back as parts
+/// (the sv-nest reader skips ETCH and INFO) gives every placed strip once, with its slots.
+#[test]
+fn every_sheet_dxf_passes_the_ezdxf_audit_and_reads_back_as_its_parts() {
+    let dir = out_dir();
+    let parts: Vec<sv_export::SheetPart> = strips()
+        .iter()
+        .map(|(s, p)| sv_export::strip_sheet_part(s, p))
+        .collect();
+    let plain: Vec<sv_nest::Part> = parts.iter().map(|p| p.part.clone()).collect();
+    let options = sv_nest::NestOptions {
+        time_limit: std::time::Duration::from_secs(600),
+        max_evaluations: Some(20_000),
+        ..sv_nest::NestOptions::default()
+    };
+    let report = sv_nest::nest_sheets(&plain, &options, &mut |_| {}).unwrap();
+    assert!(report.left_out.is_empty(), "{:?}", report.left_out);
+    let caption = sv_export::SheetCaption {
+        thickness: Some(3.0),
+        generator: "sv-export tests".into(),
+    };
+    let mut files = Vec::new();
+    let mut seen = Vec::new();
+    for (i, sheet) in report.sheets.iter().enumerate() {
+        let dxf = sv_export::sheet_dxf(&report, i, &parts, &caption).unwrap();
+        let back = sv_nest::dxf::parse_parts(&dxf, "sheet").unwrap();
+        assert!(back.rejected.is_empty(), "{:?}", back.rejected);
+        assert_eq!(back.parts.len(), sheet.placements.len());
+        for pl in &sheet.placements {
+            let original = &parts.iter().find(|p| p.part.id == pl.strip).unwrap().part;
+            let moved = original.transformed(pl.rotation_deg, pl.translation);
+            // the part read back whose outline starts where the placed outline starts
+            let v0 = moved.outer.vertices[0];
+            let read = back
+                .parts
+                .iter()
+                .find(|p| {
+                    let w = p.outer.vertices[0];
+                    (w.x - v0.x).abs() < 1e-6 && (w.y - v0.y).abs() < 1e-6
+                })
+                .unwrap_or_else(|| panic!("{} is not on sheet {}", pl.strip, i + 1));
+            assert_eq!(read.outer.vertices.len(), moved.outer.vertices.len());
+            assert_eq!(read.holes.len(), original.holes.len(), "{}", pl.strip);
+            seen.push(pl.strip.clone());
+        }
+        let stem = sv_export::sheet_file_stem(i, sheet.width, sheet.height, Some(3.0));
+        let path = dir.join(format!("{stem}.dxf"));
+        std::fs::write(&path, dxf).unwrap();
+        files.push(path);
+    }
+    seen.sort();
+    let mut all: Vec<String> = parts.iter().map(|p| p.part.id.clone()).collect();
+    all.sort();
+    assert_eq!(seen, all, "every strip on exactly one sheet");
+    audit(&files, true);
 }
 
 #[test]
