@@ -23,5 +23,7 @@ mod nest;
 mod report;
 #[path = "e2e/serve.rs"]
 mod serve;
+#[path = "e2e/sheets.rs"]
+mod sheets;
 #[path = "e2e/solve.rs"]
 mod solve;

@@ -4,13 +4,15 @@ use std::sync::OnceLock;
 
 use crate::util::{num, read_json, Dir, Output};
 
-const FILES: [&str; 9] = [
+const FILES: [&str; 11] = [
     "bom.csv",
     "frame.json",
     "frame.obj",
     "mesh.obj",
+    "nest.json",
     "report.html",
     "report.json",
+    "sheets",
     "strips",
     "strips.json",
     "timings.json",
@@ -42,6 +44,8 @@ fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
         "hub overlap",
         "time secondary / primary",
         "strips",
+        "sheets",
+        "offcut",
         "steel",
         "cut length / pierces",
         "welds",
@@ -50,7 +54,7 @@ fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
         assert!(out.stdout.contains(row), "summary lacks {row}:{out:?}");
     }
     let timings = read_json(&dir.join("out/timings.json"));
-    for stage in ["secondary", "primary", "strips", "report", "total"] {
+    for stage in ["secondary", "primary", "strips", "nest", "report", "total"] {
         let t = num(&timings[stage], stage);
         assert!(t > 0.0 && t.is_finite(), "{stage}: {t}");
     }

@@ -68,9 +68,9 @@ fn dxf_parts_nest_inside_the_sheet_and_open_contours_are_left_out() {
         for p in s["placements"].as_array().unwrap() {
             // the original outline's extent (plate + half-round end), moved as placed
             let (x0, pw, ph) = match p["strip"].as_str().unwrap() {
-                "a.dxf#1" | "a.dxf" => (0.0, 400.0, 150.0),
-                "a.dxf#2" => (1000.0, 300.0, 120.0),
-                "b.dxf#1" | "b.dxf" => (0.0, 500.0, 200.0),
+                "a#1" => (0.0, 400.0, 150.0),
+                "a#2" => (1000.0, 300.0, 120.0),
+                "b" => (0.0, 500.0, 200.0),
                 other => panic!("unknown part {other}"),
             };
             let t = p["translation"].as_array().unwrap();
@@ -103,9 +103,10 @@ fn dxf_parts_nest_inside_the_sheet_and_open_contours_are_left_out() {
             .any(|l| l["reason"].as_str().unwrap().contains("open")),
         "{left:?}"
     );
+    // one DXF and one SVG preview per sheet
     assert_eq!(
         dir.entries("n/sheets").len(),
-        report["sheets"].as_array().unwrap().len()
+        2 * report["sheets"].as_array().unwrap().len()
     );
 }
 

@@ -12,7 +12,7 @@ use std::time::Duration;
 use serde_json::Value;
 
 use crate::build::default_build;
-use crate::util::{num, read_json};
+use crate::util::{dxf_entities, num, read_json, DxfEntity};
 
 /// The summary rows of report.html: `data-key` -> (`data-value`, shown text).
 fn summary(html: &str) -> HashMap<String, (String, String)> {
@@ -38,50 +38,6 @@ fn summary(html: &str) -> HashMap<String, (String, String)> {
         rows.insert(key, (value, shown));
     }
     rows
-}
-
-/// One closed LWPOLYLINE of a DXF: layer, vertices `[x, y, bulge]`.
-struct Polyline {
-    layer: String,
-    closed: bool,
-    vertices: Vec<[f64; 3]>,
-}
-
-/// The LWPOLYLINE entities of an ASCII DXF (group code / value pairs).
-fn dxf_polylines(text: &str) -> Vec<Polyline> {
-    let lines: Vec<&str> = text.lines().map(str::trim).collect();
-    let pairs: Vec<(i32, &str)> = lines
-        .chunks(2)
-        .filter(|c| c.len() == 2)
-        .map(|c| (c[0].parse().expect("group code"), c[1]))
-        .collect();
-    let mut out: Vec<Polyline> = Vec::new();
-    let mut current: Option<Polyline> = None;
-    for (code, value) in pairs {
-        if code == 0 {
-            out.extend(current.take());
-            if value == "LWPOLYLINE" {
-                current = Some(Polyline {
-                    layer: String::new(),
-                    closed: false,
-                    vertices: Vec::new(),
-                });
-            }
-            continue;
-        }
-        let Some(p) = current.as_mut() else { continue };
-        let x = || value.parse::<f64>().expect("number");
-        match code {
-            8 => p.layer = value.to_string(),
-            70 => p.closed = value.parse::<i32>().unwrap() & 1 == 1,
-            10 => p.vertices.push([x(), 0.0, 0.0]),
-            20 => p.vertices.last_mut().unwrap()[1] = x(),
-            42 => p.vertices.last_mut().unwrap()[2] = x(),
-            _ => {}
-        }
-    }
-    out.extend(current);
-    out
 }
 
 /// Perimeter of a closed polyline with bulges: an arc of bulge b over chord c has radius
@@ -166,9 +122,9 @@ fn expected(out: &Path) -> Expected {
         steel += outline - holes;
         // cut length and pierces from the DXF the plasma shop gets
         let dxf = fs::read_to_string(out.join(format!("strips/{id}.dxf"))).unwrap();
-        let cut: Vec<Polyline> = dxf_polylines(&dxf)
+        let cut: Vec<DxfEntity> = dxf_entities(&dxf)
             .into_iter()
-            .filter(|p| p.layer == "OUTSIDE" || p.layer == "INSIDE")
+            .filter(|p| p.kind == "LWPOLYLINE" && (p.layer == "OUTSIDE" || p.layer == "INSIDE"))
             .collect();
         assert!(cut.iter().all(|p| p.closed), "{id}: open cut contour");
         assert_eq!(

@@ -132,3 +132,58 @@ pub fn num(v: &serde_json::Value, what: &str) -> f64 {
     v.as_f64()
         .unwrap_or_else(|| panic!("{what} is not a number: {v}"))
 }
+
+/// One entity of an ASCII DXF: its kind (`LWPOLYLINE`, `POINT`, `TEXT`, ...), layer, closed
+/// flag, points `[x, y, bulge]` (every 10/20 pair; a POINT or TEXT has one) and text.
+pub struct DxfEntity {
+    pub kind: String,
+    pub layer: String,
+    pub closed: bool,
+    pub vertices: Vec<[f64; 3]>,
+    pub text: String,
+}
+
+/// The entities of an ASCII DXF in file order (group code / value pairs), read here
+/// without any of the project's code.
+pub fn dxf_entities(text: &str) -> Vec<DxfEntity> {
+    let lines: Vec<&str> = text.lines().map(str::trim).collect();
+    let pairs: Vec<(i32, &str)> = lines
+        .chunks(2)
+        .filter(|c| c.len() == 2)
+        .map(|c| (c[0].parse().expect("group code"), c[1]))
+        .collect();
+    let start = pairs
+        .iter()
+        .position(|&(c, v)| c == 2 && v == "ENTITIES")
+        .expect("an ENTITIES section");
+    let mut out: Vec<DxfEntity> = Vec::new();
+    let mut current: Option<DxfEntity> = None;
+    for &(code, value) in &pairs[start + 1..] {
+        if code == 0 {
+            out.extend(current.take());
+            if value == "ENDSEC" {
+                break;
+            }
+            current = Some(DxfEntity {
+                kind: value.to_string(),
+                layer: String::new(),
+                closed: false,
+                vertices: Vec::new(),
+                text: String::new(),
+            });
+            continue;
+        }
+        let Some(p) = current.as_mut() else { continue };
+        let x = || value.parse::<f64>().expect("number");
+        match code {
+            1 => p.text = value.to_string(),
+            8 => p.layer = value.to_string(),
+            70 if p.kind == "LWPOLYLINE" => p.closed = value.parse::<i32>().unwrap() & 1 == 1,
+            10 => p.vertices.push([x(), 0.0, 0.0]),
+            20 => p.vertices.last_mut().unwrap()[1] = x(),
+            42 => p.vertices.last_mut().unwrap()[2] = x(),
+            _ => {}
+        }
+    }
+    out
+}

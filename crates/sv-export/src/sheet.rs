@@ -126,30 +126,57 @@ impl Placed {
     }
 }
 
-/// The point inside the closed polygon `poly` farthest from its boundary (searched on a
-/// grid, then refined around the best point), and that distance.
+/// The point inside the closed polygon `poly` farthest from its boundary, and that
+/// distance. Candidates: every edge's midpoint moved inward by a series of distances (for a
+/// thin slot one of them lands on its centre line, which a grid would miss), then a local
+/// grid refinement around the best.
 fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
     let (lo, hi) = sv_nest::part::bbox(poly);
+    let reach = (hi[0] - lo[0]).min(hi[1] - lo[1]);
+    let ccw = polygon_area(poly) > 0.0;
     let mut best = ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], -1.0);
-    let (mut c, mut half) = (best.0, [(hi[0] - lo[0]) / 2.0, (hi[1] - lo[1]) / 2.0]);
-    const N: usize = 16;
-    for _ in 0..5 {
+    let mut consider = |p: [f64; 2], best: &mut ([f64; 2], f64)| {
+        if point_in_polygon(p, poly) {
+            let d = boundary_distance(p, poly);
+            if d > best.1 {
+                *best = (p, d);
+            }
+        }
+    };
+    consider(best.0, &mut best);
+    let n = poly.len();
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let len = dx.hypot(dy);
+        if len < 1e-9 {
+            continue;
+        }
+        // inward normal: left of the edge for a counter-clockwise polygon
+        let s = if ccw { 1.0 } else { -1.0 };
+        let nrm = [-s * dy / len, s * dx / len];
+        let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+        let mut t = reach / 64.0;
+        while t <= reach {
+            consider([mid[0] + t * nrm[0], mid[1] + t * nrm[1]], &mut best);
+            t *= 1.25;
+        }
+    }
+    // refine: shrinking grids around the best point
+    let mut half = (best.1.max(reach / 64.0)).max(1e-3);
+    const N: usize = 8;
+    for _ in 0..4 {
+        let c = best.0;
         for i in 0..=N {
             for j in 0..=N {
                 let p = [
-                    c[0] - half[0] + 2.0 * half[0] * i as f64 / N as f64,
-                    c[1] - half[1] + 2.0 * half[1] * j as f64 / N as f64,
+                    c[0] - half + 2.0 * half * i as f64 / N as f64,
+                    c[1] - half + 2.0 * half * j as f64 / N as f64,
                 ];
-                if point_in_polygon(p, poly) {
-                    let d = boundary_distance(p, poly);
-                    if d > best.1 {
-                        best = (p, d);
-                    }
-                }
+                consider(p, &mut best);
             }
         }
-        c = best.0;
-        half = [half[0] * 4.0 / N as f64, half[1] * 4.0 / N as f64];
+        half /= 3.0;
     }
     best
 }
@@ -358,5 +385,17 @@ mod tests {
         ];
         let (p, d) = deepest_point(&l);
         assert!(point_in_polygon(p, &l) && d > 4.9, "{p:?} {d}");
+        // a thin L-shaped slot as the strips have (4.5 mm wide, 300 mm arms, clockwise):
+        // the point is on a centre line, not at the (outside) middle of the bounding box
+        let slot = [
+            [0.0, 0.0],
+            [0.0, 300.0],
+            [4.5, 300.0],
+            [4.5, 4.5],
+            [300.0, 4.5],
+            [300.0, 0.0],
+        ];
+        let (p, d) = deepest_point(&slot);
+        assert!(point_in_polygon(p, &slot) && d > 2.2, "{p:?} {d}");
     }
 }

@@ -1,0 +1,445 @@
+//! The sheets of the default build (`DIR/nest.json`, `DIR/sheets/*.dxf`) checked as a plasma
+//! shop would: read from the DXF files alone with true arcs flattened finely, every strip on
+//! exactly one sheet, inside the margin, no two parts closer than the spacing, each part's
+//! inside contours before its outline, a pierce point in scrap per contour; and
+//! `spinvalence nest` reading the build's strip DXFs by their cut layers.
+
+use std::collections::HashMap;
+use std::fs;
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::build::default_build;
+use crate::util::{dxf_entities, num, read_json, Dir, DxfEntity};
+
+/// Chord error (mm) of the arc flattening below.
+const CHORD: f64 = 0.01;
+
+/// Points of a closed polyline with bulges, arcs replaced by chords within [`CHORD`].
+fn flatten(v: &[[f64; 3]]) -> Vec<[f64; 2]> {
+    let mut out = Vec::new();
+    for i in 0..v.len() {
+        let (a, b) = (v[i], v[(i + 1) % v.len()]);
+        out.push([a[0], a[1]]);
+        if a[2] == 0.0 {
+            continue;
+        }
+        let sweep = 4.0 * a[2].atan();
+        let c = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let r = c / (2.0 * (sweep / 2.0).sin().abs());
+        // centre: left of the chord for a counter-clockwise arc (b > 0)
+        let d = r * (sweep / 2.0).cos() * sweep.signum();
+        let (mx, my) = ((a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0);
+        let (cx, cy) = (mx - (b[1] - a[1]) / c * d, my + (b[0] - a[0]) / c * d);
+        let step = 2.0 * (1.0 - CHORD / r).clamp(-1.0, 1.0).acos();
+        let n = (sweep.abs() / step.max(1e-4)).ceil().max(1.0) as usize;
+        let a0 = (a[1] - cy).atan2(a[0] - cx);
+        for k in 1..n {
+            let t = a0 + sweep * k as f64 / n as f64;
+            out.push([cx + r * t.cos(), cy + r * t.sin()]);
+        }
+    }
+    out
+}
+
+fn inside(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
+    let mut c = false;
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        if (a[1] > p[1]) != (b[1] > p[1])
+            && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
+        {
+            c = !c;
+        }
+    }
+    c
+}
+
+fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let l2 = dx * dx + dy * dy;
+    let t = if l2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+}
+
+/// Smallest distance between two closed polylines (0 when they cross).
+fn distance(p: &[[f64; 2]], q: &[[f64; 2]]) -> f64 {
+    let mut best = f64::INFINITY;
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        for j in 0..q.len() {
+            let (c, d) = (q[j], q[(j + 1) % q.len()]);
+            let cross = |o: [f64; 2], u: [f64; 2], v: [f64; 2]| {
+                (u[0] - o[0]) * (v[1] - o[1]) - (u[1] - o[1]) * (v[0] - o[0])
+            };
+            if cross(a, b, c) * cross(a, b, d) < 0.0 && cross(c, d, a) * cross(c, d, b) < 0.0 {
+                return 0.0;
+            }
+            best = best
+                .min(point_segment(a, c, d))
+                .min(point_segment(b, c, d))
+                .min(point_segment(c, a, b))
+                .min(point_segment(d, a, b));
+        }
+    }
+    best
+}
+
+fn bbox(p: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    p.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), q| {
+            (
+                [lo[0].min(q[0]), lo[1].min(q[1])],
+                [hi[0].max(q[0]), hi[1].max(q[1])],
+            )
+        },
+    )
+}
+
+/// A part as read from a sheet DXF: its outline and the inside contours written just
+/// before it.
+struct SheetPart {
+    outline: Vec<[f64; 2]>,
+    holes: Vec<Vec<[f64; 2]>>,
+}
+
+impl SheetPart {
+    fn material(&self, p: [f64; 2]) -> bool {
+        inside(p, &self.outline) && !self.holes.iter().any(|h| inside(p, h))
+    }
+}
+
+/// The parts of a sheet DXF, checking the cut order on the way: every INSIDE contour lies
+/// in the outline that follows it (inside contours first, then their part's outline).
+fn parts_of(name: &str, entities: &[DxfEntity]) -> Vec<SheetPart> {
+    let mut parts = Vec::new();
+    let mut pending: Vec<Vec<[f64; 2]>> = Vec::new();
+    for e in entities.iter().filter(|e| e.kind == "LWPOLYLINE") {
+        match e.layer.as_str() {
+            "INSIDE" | "OUTSIDE" => assert!(e.closed, "{name}: open cut contour"),
+            _ => continue,
+        }
+        let pts = flatten(&e.vertices);
+        if e.layer == "INSIDE" {
+            pending.push(pts);
+            continue;
+        }
+        for h in &pending {
+            assert!(
+                h.iter().all(|&p| inside(p, &pts)),
+                "{name}: an INSIDE contour is not within the OUTSIDE contour written after it"
+            );
+        }
+        parts.push(SheetPart {
+            outline: pts,
+            holes: std::mem::take(&mut pending),
+        });
+    }
+    assert!(
+        pending.is_empty(),
+        "{name}: INSIDE contours after the last outline"
+    );
+    parts
+}
+
+#[test]
+fn build_sheets_hold_every_strip_once_inside_the_margin_and_apart() {
+    let (dir, out) = default_build();
+    out.expect_code(0);
+    let out_dir = dir.join("out");
+    let nest = read_json(&out_dir.join("nest.json"));
+    let strips = read_json(&out_dir.join("strips.json"));
+    let spec = &nest["sheet"];
+    let (margin, spacing) = (
+        num(&spec["margin"], "margin"),
+        num(&spec["spacing"], "spacing"),
+    );
+    let profile = &strips["params"];
+    assert!(
+        spacing >= num(&profile["kerf"], "kerf"),
+        "spacing {spacing} below the kerf"
+    );
+    let sheets = nest["sheets"].as_array().unwrap();
+    assert!(!sheets.is_empty());
+    assert!(nest["left_out"].as_array().unwrap().is_empty(), "{nest}");
+    let ids: Vec<&str> = strips["strips"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["id"].as_str().unwrap())
+        .collect();
+    let mut placed: HashMap<String, usize> = HashMap::new();
+    let mut labelled: HashMap<String, usize> = HashMap::new();
+    let mut files = dir.entries("out/sheets");
+    files.sort();
+    assert_eq!(files.len(), 2 * sheets.len(), "{files:?}");
+    let mut outline_area = 0.0;
+    for (i, sheet) in sheets.iter().enumerate() {
+        let (w, h) = (
+            num(&sheet["width"], "width"),
+            num(&sheet["height"], "height"),
+        );
+        let stem = format!("sheet-{:02}_{}x{}mm_t3mm", i + 1, w, h);
+        assert!(files.contains(&format!("{stem}.dxf")), "{stem}: {files:?}");
+        assert!(files.contains(&format!("{stem}.svg")), "{stem}: {files:?}");
+        let text = fs::read_to_string(out_dir.join(format!("sheets/{stem}.dxf"))).unwrap();
+        assert!(text.contains("$ACADVER\n  1\nAC1015") && text.contains("$INSUNITS\n 70\n4"));
+        assert!(!text.contains("SPLINE"), "{stem}: splines");
+        let entities = dxf_entities(&text);
+        let parts = parts_of(&stem, &entities);
+        let placements = sheet["placements"].as_array().unwrap();
+        assert_eq!(parts.len(), placements.len(), "{stem}");
+        for p in placements {
+            *placed
+                .entry(p["strip"].as_str().unwrap().into())
+                .or_default() += 1;
+        }
+        // the sheet outline on INFO
+        assert!(
+            entities.iter().any(|e| e.kind == "LWPOLYLINE"
+                && e.layer == "INFO"
+                && e.closed
+                && e.vertices.len() == 4
+                && bbox(&flatten(&e.vertices)) == ([0.0, 0.0], [w, h])),
+            "{stem}: no sheet outline on INFO"
+        );
+        // labels for people: one TEXT per strip on INFO
+        for e in entities.iter().filter(|e| e.kind == "TEXT") {
+            assert_eq!(e.layer, "INFO", "{stem}: text off INFO");
+            if ids.contains(&e.text.as_str()) {
+                *labelled.entry(e.text.clone()).or_default() += 1;
+            }
+        }
+        // inside the margin
+        let bounds: Vec<([f64; 2], [f64; 2])> = parts.iter().map(|p| bbox(&p.outline)).collect();
+        for (lo, hi) in &bounds {
+            assert!(
+                lo[0] >= margin - 1e-6
+                    && lo[1] >= margin - 1e-6
+                    && hi[0] <= w - margin + 1e-6
+                    && hi[1] <= h - margin + 1e-6,
+                "{stem}: a part leaves the margin: {lo:?} {hi:?}"
+            );
+        }
+        // apart by the spacing (chords lie within CHORD of the arcs on either part)
+        for a in 0..parts.len() {
+            for b in a + 1..parts.len() {
+                let ((la, ha), (lb, hb)) = (bounds[a], bounds[b]);
+                if la[0] > hb[0] + spacing
+                    || lb[0] > ha[0] + spacing
+                    || la[1] > hb[1] + spacing
+                    || lb[1] > ha[1] + spacing
+                {
+                    continue;
+                }
+                let d = distance(&parts[a].outline, &parts[b].outline);
+                assert!(
+                    d >= spacing - 2.0 * CHORD,
+                    "{stem}: parts {a} and {b} are {d} mm apart (spacing {spacing})"
+                );
+            }
+        }
+        // a pierce point in scrap per cut contour
+        let pierces: Vec<[f64; 2]> = entities
+            .iter()
+            .filter(|e| e.kind == "POINT")
+            .map(|e| {
+                assert_eq!(e.layer, "INFO");
+                [e.vertices[0][0], e.vertices[0][1]]
+            })
+            .collect();
+        let contours: usize = parts.iter().map(|p| 1 + p.holes.len()).sum();
+        assert_eq!(pierces.len(), contours, "{stem}: pierce points");
+        for &p in &pierces {
+            assert!(
+                p[0] > 0.0 && p[1] > 0.0 && p[0] < w && p[1] < h,
+                "{stem}: pierce point {p:?} off the sheet"
+            );
+            assert!(
+                !parts.iter().any(|q| q.material(p)),
+                "{stem}: pierce point {p:?} on a part"
+            );
+        }
+        let polygon_area = |p: &[[f64; 2]]| {
+            (0..p.len())
+                .map(|i| {
+                    let (a, b) = (p[i], p[(i + 1) % p.len()]);
+                    a[0] * b[1] - b[0] * a[1]
+                })
+                .sum::<f64>()
+                .abs()
+                / 2.0
+        };
+        outline_area += parts.iter().map(|p| polygon_area(&p.outline)).sum::<f64>();
+        // the offcut of the last sheet is clear of parts
+        if let Some(o) = nest["offcut"].as_object() {
+            if o["sheet"].as_u64() == Some(i as u64) {
+                let x = num(&o["x"], "offcut x");
+                assert!(
+                    bounds.iter().all(|(_, hi)| hi[0] <= x + 1e-6),
+                    "{stem}: a part in the offcut"
+                );
+            }
+        }
+    }
+    for id in &ids {
+        assert_eq!(placed.get(*id), Some(&1), "{id} placed once in nest.json");
+        assert_eq!(
+            labelled.get(*id),
+            Some(&1),
+            "{id} labelled once on the sheets"
+        );
+    }
+    assert_eq!(placed.len(), ids.len());
+    // the reported lower bound is at least the plain area bound recomputed from the DXFs,
+    // and no layout beats it
+    let usable = (3000.0 - 2.0 * margin + spacing) * (1500.0 - 2.0 * margin + spacing);
+    let area_bound = (outline_area / usable).ceil() as u64;
+    let lb = nest["lower_bound_sheets"].as_u64().unwrap();
+    assert!(
+        lb >= area_bound,
+        "lower bound {lb} < area bound {area_bound}"
+    );
+    assert!(sheets.len() as u64 >= lb);
+}
+
+#[test]
+fn nest_reads_the_strip_dxfs_by_their_cut_layers() {
+    let (build, out) = default_build();
+    out.expect_code(0);
+    let strips = read_json(&build.join("out/strips.json"));
+    let list = strips["strips"].as_array().unwrap();
+    let dir = Dir::new();
+    let mut args: Vec<String> = [
+        "nest",
+        "--thickness",
+        "3",
+        "--nest-seconds",
+        "2",
+        "--out",
+        "n",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for s in list {
+        let id = s["id"].as_str().unwrap();
+        args.push(
+            build
+                .join(&format!("out/strips/{id}.dxf"))
+                .display()
+                .to_string(),
+        );
+    }
+    let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+    let run = dir.run(&argv);
+    run.expect_code(0);
+    let nest = read_json(&dir.join("n/nest.json"));
+    assert!(nest["left_out"].as_array().unwrap().is_empty(), "{nest}");
+    let mut ids: Vec<&str> = nest["sheets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| s["placements"].as_array().unwrap())
+        .map(|p| p["strip"].as_str().unwrap())
+        .collect();
+    ids.sort();
+    let mut want: Vec<&str> = list.iter().map(|s| s["id"].as_str().unwrap()).collect();
+    want.sort();
+    assert_eq!(
+        ids, want,
+        "one part per strip DXF (INFO tiles and ETCH text are not parts)"
+    );
+    // every slot came along as a hole
+    let cuts: usize = list
+        .iter()
+        .map(|s| s["cuts"].as_array().unwrap().len())
+        .sum();
+    let mut inside = 0;
+    for f in dir.entries("n/sheets") {
+        if f.ends_with(".dxf") {
+            assert!(f.ends_with("_t3mm.dxf"), "{f}");
+            let text = fs::read_to_string(dir.join(&format!("n/sheets/{f}"))).unwrap();
+            inside += dxf_entities(&text)
+                .iter()
+                .filter(|e| e.kind == "LWPOLYLINE" && e.layer == "INSIDE")
+                .count();
+        }
+    }
+    assert_eq!(inside, cuts);
+}
+
+/// `nest.json` of a run that left parts out names each of them with the reason.
+fn left_out(path: &Path) -> Vec<(String, String)> {
+    let nest: Value = read_json(path);
+    nest["left_out"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| {
+            (
+                l["part"].as_str().unwrap().to_string(),
+                l["reason"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn bad_parts_are_named_and_left_out_while_the_others_nest() {
+    let dir = Dir::new();
+    let square = |x: f64, s: f64| {
+        format!(
+            "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n8\nOUTSIDE\n90\n4\n70\n1\n10\n{x}\n20\n0\n10\n{}\n20\n0\n10\n{}\n20\n{s}\n10\n{x}\n20\n{s}\n0\nENDSEC\n0\nEOF\n",
+            x + s,
+            x + s
+        )
+    };
+    dir.write("good.dxf", square(0.0, 200.0));
+    dir.write("huge.dxf", square(0.0, 5000.0));
+    dir.write(
+        "bowtie.dxf",
+        "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n8\nOUTSIDE\n90\n4\n70\n1\n10\n0\n20\n0\n10\n100\n20\n100\n10\n100\n20\n0\n10\n0\n20\n100\n0\nENDSEC\n0\nEOF\n",
+    );
+    dir.write("garbage.dxf", "this is not a DXF\n");
+    let out = dir.run(&[
+        "nest",
+        "good.dxf",
+        "huge.dxf",
+        "bowtie.dxf",
+        "garbage.dxf",
+        "--nest-seconds",
+        "1",
+        "--out",
+        "n",
+    ]);
+    out.expect_code(0);
+    let left = left_out(&dir.join("n/nest.json"));
+    for (part, why) in [
+        ("huge", "larger than every sheet"),
+        ("bowtie", "self-intersecting"),
+        ("garbage.dxf", ""),
+    ] {
+        assert!(
+            left.iter()
+                .any(|(p, r)| p.contains(part) && r.contains(why)),
+            "{part}: {left:?}"
+        );
+        assert!(out.stdout.contains(part), "{part} in the summary:{out:?}");
+    }
+    let nest = read_json(&dir.join("n/nest.json"));
+    let placed: Vec<&str> = nest["sheets"][0]["placements"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["strip"].as_str().unwrap())
+        .collect();
+    assert_eq!(placed, ["good"]);
+    assert_eq!(left.len(), 3, "{left:?}");
+}
