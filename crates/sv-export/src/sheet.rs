@@ -135,7 +135,7 @@ fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
     let reach = (hi[0] - lo[0]).min(hi[1] - lo[1]);
     let ccw = polygon_area(poly) > 0.0;
     let mut best = ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], -1.0);
-    let mut consider = |p: [f64; 2], best: &mut ([f64; 2], f64)| {
+    let consider = |p: [f64; 2], best: &mut ([f64; 2], f64)| {
         if point_in_polygon(p, poly) {
             let d = boundary_distance(p, poly);
             if d > best.1 {
