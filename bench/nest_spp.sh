@@ -25,7 +25,7 @@ DOC=docs/nesting.md
 BEGIN='<!-- bench:begin -->'; END='<!-- bench:end -->'
 if grep -q "$BEGIN" "$DOC"; then
   awk -v b="$BEGIN" -v e="$END" -v f="$OUT" -v s="$SECS" '
-    $0==b {print; print ""; print "Run: `bench/nest_spp.sh " s "` (1 thread per run, seed 0)."; print ""; while ((getline l < f) > 0) print l; print ""; skip=1; next}
+    $0==b {print; print ""; print "Run: `bench/nest_spp.sh " s "` (two searches side by side on the 2 cores, seed 0, best kept)."; print ""; while ((getline l < f) > 0) print l; print ""; skip=1; next}
     $0==e {skip=0}
     !skip {print}' "$DOC" > "$DOC.tmp" && mv "$DOC.tmp" "$DOC"
 fi

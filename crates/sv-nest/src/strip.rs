@@ -72,6 +72,9 @@ pub struct StripOptions {
     pub max_evaluations: Option<u64>,
     /// samples per item in the constructive phase
     pub construct_samples: usize,
+    /// independent searches run side by side (seeds derived from `seed`), the best kept;
+    /// default: one per core
+    pub threads: usize,
 }
 
 /// Default wall-clock budget of [`StripOptions`].
@@ -84,6 +87,7 @@ impl Default for StripOptions {
             time_limit: Duration::from_secs(DEFAULT_STRIP_SECONDS),
             max_evaluations: None,
             construct_samples: 400,
+            threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
         }
     }
 }
@@ -133,7 +137,44 @@ pub struct StripResult {
 
 /// Strip packing: constructive bottom-left-fill, then repeatedly shrink the strip and separate
 /// the overlapping items (guided local search); the best feasible layout is kept (anytime).
+/// With `threads > 1`, as many independent searches run at once (the first with `seed`, the
+/// others with seeds derived from it), each with the whole budget; the densest wins (ties:
+/// the lowest thread), so a fixed evaluation budget still gives the same layout every run.
+/// Progress is reported by the first search.
 pub fn nest_strip(
+    inst: &StripInstance,
+    opts: &StripOptions,
+    progress: &mut dyn FnMut(&Progress),
+) -> StripResult {
+    let threads = opts.threads.max(1);
+    if threads == 1 {
+        return nest_strip_one(inst, opts, progress);
+    }
+    std::thread::scope(|scope| {
+        let others: Vec<_> = (1..threads as u64)
+            .map(|k| {
+                let o = StripOptions {
+                    seed: opts.seed ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                    ..opts.clone()
+                };
+                scope.spawn(move || nest_strip_one(inst, &o, &mut |_| {}))
+            })
+            .collect();
+        let mut best = nest_strip_one(inst, opts, progress);
+        let mut evaluations = best.evaluations;
+        for h in others {
+            let r = h.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+            evaluations += r.evaluations;
+            if r.length < best.length {
+                best = r;
+            }
+        }
+        best.evaluations = evaluations;
+        best
+    })
+}
+
+fn nest_strip_one(
     inst: &StripInstance,
     opts: &StripOptions,
     progress: &mut dyn FnMut(&Progress),
