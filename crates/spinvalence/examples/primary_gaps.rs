@@ -148,7 +148,11 @@ fn main() {
             100.0 * mismatch.0 / unit,
             mismatch.1
         );
-        let hi = s.deployments.iter().filter(|d| d.theta > 1.45).map(|d| d.theta.to_degrees());
+        let hi = s
+            .deployments
+            .iter()
+            .filter(|d| d.theta > 1.45)
+            .map(|d| d.theta.to_degrees());
         let hi: Vec<String> = hi.map(|t| format!("{t:.1}")).collect();
         let capped: Vec<usize> = s
             .deployments
@@ -165,9 +169,24 @@ fn main() {
         println!("    units at their theta cap: {capped:?}");
         let lo = s.deployments.iter().filter(|d| d.theta < 0.06).count();
         let ph = s.deployments.iter().filter(|d| d.phi.abs() > 1.19).count();
-        let thmax = s.deployments.iter().map(|d| d.theta).fold(0.0, f64::max).to_degrees();
-        let thmin = s.deployments.iter().map(|d| d.theta).fold(9.0, f64::min).to_degrees();
-        let phmax = s.deployments.iter().map(|d| d.phi.abs()).fold(0.0, f64::max).to_degrees();
+        let thmax = s
+            .deployments
+            .iter()
+            .map(|d| d.theta)
+            .fold(0.0, f64::max)
+            .to_degrees();
+        let thmin = s
+            .deployments
+            .iter()
+            .map(|d| d.theta)
+            .fold(9.0, f64::min)
+            .to_degrees();
+        let phmax = s
+            .deployments
+            .iter()
+            .map(|d| d.phi.abs())
+            .fold(0.0, f64::max)
+            .to_degrees();
         println!("    theta {thmin:.1}..{thmax:.1} deg, |phi| <= {phmax:.1} deg; theta > 83 deg: {hi:?}; at theta min: {lo}; at phi bound: {ph}");
         let file = s.to_frame_file(&mesh);
         let mut order: Vec<usize> = (0..s.links.len()).collect();
@@ -184,7 +203,10 @@ fn main() {
             let c = sv_geom::segment_closest(&p(f, k), &p(f, k + 1), &p(g, m), &p(g, m + 1));
             let (df_, dg_) = (&file.units[f], &file.units[g]);
             let boundary = |u: &sv_frame::UnitRecord| {
-                file.links.iter().filter(|l| l.units.contains(&u.face)).count()
+                file.links
+                    .iter()
+                    .filter(|l| l.units.contains(&u.face))
+                    .count()
             };
             println!(
                 "    s {:.2} t {:.2} links {}/{}",

@@ -44,6 +44,14 @@ pub enum SidePolicy {
     Opposite,
 }
 
+/// Powers of the p-norm continuation of [`GapObjective::Max`]: `||gaps||_p` tends to the
+/// largest gap as p grows (`max <= ||g||_p <= L^(1/p) max` for `L` links); each power starts
+/// where the previous one ended.
+const NORM_POWERS: [Real; 5] = [4.0, 8.0, 16.0, 32.0, 64.0];
+
+/// Levenberg-Marquardt iterations per power of [`NORM_POWERS`].
+const ITERATIONS_PER_POWER: usize = 10;
+
 /// What the primary solve minimises (after a least-squares start).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -168,7 +176,7 @@ fn theta_max(hub: &Hub) -> Real {
     let k = a.min(b) / a.max(b);
     THETA_BOUNDS
         .1
-        .min(2.0 * k.atan() - std::env::var("SV_MARGIN").ok().and_then(|x| x.parse::<Real>().ok()).unwrap_or(0.02))
+        .min(2.0 * k.atan() - 0.02)
         .max(THETA_BOUNDS.0)
 }
 
@@ -219,10 +227,7 @@ pub fn solve(
         })
     };
     // least squares first, to get into the basin
-    let warm = match options.objective {
-        GapObjective::Sum => (total / 4).max(1).min(total),
-        GapObjective::Max => (total / 4).max(1).min(total),
-    };
+    let warm = (total / 4).max(1).min(total);
     let mut iterations = lm.run(
         &mut deployments,
         Objective::LeastSquares,
@@ -247,22 +252,10 @@ pub fn solve(
         GapObjective::Max => {
             // continuation in p toward the largest gap; keep the best point seen
             let mut best = (gap_max_least_squares, deployments.clone());
-            let powers: Vec<Real> = std::env::var("SV_P")
-                .ok()
-                .map(|s| s.split(',').filter_map(|x| x.parse().ok()).collect())
-                .unwrap_or_else(|| vec![4.0, 8.0, 16.0, 32.0, 64.0]);
-            let per: usize = std::env::var("SV_PER")
-                .ok()
-                .and_then(|s| s.parse().ok())
-                .unwrap_or(10);
-            let mix: Real = std::env::var("SV_MIX")
-                .ok()
-                .and_then(|x| x.parse().ok())
-                .unwrap_or(1.0);
-            for p in powers {
+            for p in NORM_POWERS {
                 let now = problem.gaps(&deployments)?;
                 let s = now.iter().copied().fold(0.0, Real::max);
-                let budget = per.min(total.saturating_sub(iterations));
+                let budget = ITERATIONS_PER_POWER.min(total.saturating_sub(iterations));
                 if budget == 0 || s <= 1e-9 * scale {
                     break;
                 }
@@ -272,7 +265,7 @@ pub fn solve(
                     Objective::Norm {
                         p,
                         scale: s,
-                        quad: mix / links.len() as Real,
+                        quad: 1.0 / links.len() as Real,
                     },
                     budget,
                     options.tolerance,
@@ -284,14 +277,6 @@ pub fn solve(
                         report_progress(base + it, gaps)
                     },
                 )?;
-                if std::env::var("SV_TRACE").is_ok() {
-                    let g = problem.gaps(&deployments)?;
-                    eprintln!(
-                        "  p {p}: it {iterations} max {:.2} sum {:.0}",
-                        g.iter().copied().fold(0.0, Real::max),
-                        g.iter().sum::<Real>()
-                    );
-                }
             }
             deployments = best.1;
         }
@@ -709,7 +694,9 @@ impl Objective {
                 let s = scale;
                 let n: Real = gaps.iter().map(|g| (g / s).powf(p)).sum();
                 if n <= 0.0 {
-                    out.weights.iter_mut().for_each(|w| *w = [quad / s, 0.0, 0.0]);
+                    out.weights
+                        .iter_mut()
+                        .for_each(|w| *w = [quad / s, 0.0, 0.0]);
                     return;
                 }
                 let a = (s / p) * n.powf(1.0 / p - 1.0);
@@ -785,11 +772,7 @@ impl<'a> Lm<'a> {
         let lin = |e: &dyn std::fmt::Debug| FrameError::Linear(format!("{e:?}"));
         let (symbolic, argsort) =
             SymbolicSparseColMat::try_new_from_indices(2 * n, 2 * n, &idx).map_err(|e| lin(&e))?;
-        let threshold = std::env::var("SV_SUPER")
-            .ok()
-            .and_then(|x| x.parse().ok())
-            .map(SupernodalThreshold)
-            .unwrap_or(SupernodalThreshold::FORCE_SUPERNODAL);
+        let threshold = SupernodalThreshold::FORCE_SUPERNODAL;
         let llt_symbolic = factorize_symbolic_cholesky(
             symbolic.as_ref(),
             faer::Side::Upper,
@@ -979,11 +962,7 @@ impl<'a> Lm<'a> {
                     let step_ok = trial
                         .iter()
                         .all(|d| d.theta.is_finite() && d.phi.is_finite());
-                    let new = if step_ok {
-                        p.gaps(&trial).ok()
-                    } else {
-                        None
-                    };
+                    let new = if step_ok { p.gaps(&trial).ok() } else { None };
                     if let Some(g) = new.filter(|g| objective.merit(g, &model) < cost) {
                         deps.copy_from_slice(&trial);
                         gaps = g;
@@ -993,11 +972,6 @@ impl<'a> Lm<'a> {
                             lambda * 2.0
                         };
                         accepted = true;
-                        if std::env::var("SV_TRACE2").is_ok() {
-                            let m = gaps.iter().copied().fold(0.0, Real::max);
-                            let nfixed = fixed.iter().filter(|f| **f).count();
-                            eprintln!("    it {it} lambda {lambda:.1e} frac {fraction} max {m:.2} fixed {nfixed}");
-                        }
                         break;
                     }
                 }
