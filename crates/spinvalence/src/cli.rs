@@ -211,6 +211,9 @@ pub struct SolveArgs {
     /// Which side of its primary tile each hub goes to.
     #[arg(long, value_enum, default_value_t = SideArg::Auto)]
     pub side: SideArg,
+    /// What to minimise: the largest link gap (max) or the sum of gaps (sum, the paper's).
+    #[arg(long, value_enum, default_value_t = ObjectiveArg::Max)]
+    pub objective: ObjectiveArg,
     /// Largest allowed face non-planarity: diagonal distance / mean edge of the face.
     #[arg(long, value_name = "X", default_value_t = MeshChecks::DEFAULT_PLANARITY_TOLERANCE,
           allow_negative_numbers = true)]
@@ -235,6 +238,24 @@ pub enum SideArg {
     Normal,
     /// Every hub on the side opposite to its face normal.
     Opposite,
+}
+
+/// `--objective`, the command-line face of [`sv_frame::GapObjective`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ObjectiveArg {
+    /// The largest link gap (min-max, after a least-squares start).
+    Max,
+    /// The sum of link gaps (the paper's objective).
+    Sum,
+}
+
+impl From<ObjectiveArg> for sv_frame::GapObjective {
+    fn from(o: ObjectiveArg) -> Self {
+        match o {
+            ObjectiveArg::Max => sv_frame::GapObjective::Max,
+            ObjectiveArg::Sum => sv_frame::GapObjective::Sum,
+        }
+    }
 }
 
 impl From<SideArg> for SidePolicy {

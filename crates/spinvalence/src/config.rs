@@ -191,6 +191,8 @@ pub struct PrimaryConfig {
     pub expansion: f64,
     /// `auto`, `normal` or `opposite`.
     pub side: SidePolicy,
+    /// `max` (the largest link gap) or `sum` (the sum of gaps, the paper's objective).
+    pub objective: sv_frame::GapObjective,
     /// Largest number of solver iterations.
     pub max_iterations: usize,
     /// Stall tolerance of the solver (relative decrease over a few iterations).
@@ -206,6 +208,7 @@ impl Default for PrimaryConfig {
             spin_angle_deg: d.spin_angle.to_degrees(),
             expansion: d.expansion,
             side: d.side,
+            objective: d.objective,
             max_iterations: d.max_iterations,
             tolerance: d.tolerance,
             planarity_tolerance: d.planarity_tolerance,
@@ -238,6 +241,7 @@ impl PrimaryConfig {
             spin_angle: spin.to_radians(),
             expansion: e,
             side: self.side,
+            objective: self.objective,
             max_iterations: self.max_iterations,
             tolerance: self.tolerance,
             planarity_tolerance: tol,

@@ -32,6 +32,7 @@ pub fn options(args: &SolveArgs) -> Result<SolveOptions> {
         spin_angle: spin.to_radians(),
         expansion: e,
         side: args.side.into(),
+        objective: args.objective.into(),
         max_iterations: args.max_iterations,
         planarity_tolerance: tol,
         ..SolveOptions::default()

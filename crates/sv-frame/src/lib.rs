@@ -30,6 +30,6 @@ pub use file::{
 pub use hub::{hubs_from_mesh, Hub};
 pub use mesh::{Link, MeshChecks, QuadMesh};
 pub use solve::{
-    evaluate, solve, Evaluation, Progress, SidePolicy, SolveOptions, SolveReport, Solved,
-    DEFAULT_SPIN_ANGLE, STALL_WINDOW,
+    evaluate, solve, Evaluation, GapObjective, Progress, SidePolicy, SolveOptions, SolveReport,
+    Solved, DEFAULT_SPIN_ANGLE, STALL_WINDOW,
 };

@@ -10,9 +10,13 @@
 //! normal equations (2x2 blocks, one per unit and per link) and factors them with faer's
 //! sparse Cholesky, whose symbolic analysis is done once.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
+};
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{Pair, SparseColMat, SymbolicSparseColMat};
+use faer::{Conj, Par};
 use serde::{Deserialize, Serialize};
 use sv_geom::{segment_closest, Point3, Real, Vector3};
 use sv_unit::{deploy, primary_in_hub_frame, AxisCase, Deployment, Side};
@@ -40,6 +44,25 @@ pub enum SidePolicy {
     Opposite,
 }
 
+/// Powers of the p-norm continuation of [`GapObjective::Max`]: `||gaps||_p` tends to the
+/// largest gap as p grows (`max <= ||g||_p <= L^(1/p) max` for `L` links); each power starts
+/// where the previous one ended.
+const NORM_POWERS: [Real; 5] = [4.0, 8.0, 16.0, 32.0, 64.0];
+
+/// Levenberg-Marquardt iterations per power of [`NORM_POWERS`].
+const ITERATIONS_PER_POWER: usize = 10;
+
+/// What the primary solve minimises (after a least-squares start).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum GapObjective {
+    /// The largest link gap (min-max), by a continuation of smooth p-norms.
+    #[default]
+    Max,
+    /// The sum of link gaps (the paper's objective, and the SLSQP baseline's).
+    Sum,
+}
+
 /// Options of [`solve`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolveOptions {
@@ -49,6 +72,8 @@ pub struct SolveOptions {
     pub expansion: Real,
     /// Side choice.
     pub side: SidePolicy,
+    /// What to minimise.
+    pub objective: GapObjective,
     /// Axis case of every unit, or `None` to choose per unit: the two cases are the same
     /// motion at `phi = 0` (the start), so each unit takes the case whose tilt lowers the
     /// gaps fastest there. Default: the paper's case (`t . r1 = 0`) for every unit, which
@@ -70,8 +95,9 @@ impl Default for SolveOptions {
             spin_angle: DEFAULT_SPIN_ANGLE,
             expansion: 1.0,
             side: SidePolicy::Auto,
+            objective: GapObjective::Max,
             axis_case: Some(AxisCase::OrthogonalToR1),
-            max_iterations: 40,
+            max_iterations: 60,
             tolerance: 1e-3,
             planarity_tolerance: crate::MeshChecks::DEFAULT_PLANARITY_TOLERANCE,
         }
@@ -87,6 +113,8 @@ pub struct Progress {
     pub max_iterations: usize,
     /// Current sum of gaps (mm).
     pub gap_sum: Real,
+    /// Current largest gap (mm).
+    pub gap_max: Real,
 }
 
 /// What a solve reached.
@@ -94,6 +122,10 @@ pub struct Progress {
 pub struct SolveReport {
     /// Sum of gaps at the start (theta = alpha, phi = 0).
     pub gap_sum_start: Real,
+    /// Largest gap at the start.
+    pub gap_max_start: Real,
+    /// Largest gap after the least-squares phase (the start of the min-max phase).
+    pub gap_max_least_squares: Real,
     /// Sum of gaps at the end (the paper's objective).
     pub gap_sum: Real,
     /// Largest gap at the end.
@@ -182,42 +214,78 @@ pub fn solve(
     }
     let start = problem.gaps(&deployments)?;
     let gap_sum_start: Real = start.iter().sum();
+    let gap_max_start = start.iter().copied().fold(0.0, Real::max);
     let mut lm = Lm::new(&problem)?;
     let total = options.max_iterations;
     let scale = hubs.iter().map(|h| h.rhombus.side()).sum::<Real>() / n as Real;
-    // least squares first, to get into the basin, then the sum of gaps itself
+    let mut report_progress = |iteration: usize, gaps: &[Real]| {
+        progress(Progress {
+            iteration,
+            max_iterations: total,
+            gap_sum: gaps.iter().sum(),
+            gap_max: gaps.iter().copied().fold(0.0, Real::max),
+        })
+    };
+    // least squares first, to get into the basin
     let warm = (total / 4).max(1).min(total);
     let mut iterations = lm.run(
         &mut deployments,
         Objective::LeastSquares,
         warm,
         options.tolerance.max(1e-2),
-        &mut |it, sum| {
-            progress(Progress {
-                iteration: it,
-                max_iterations: total,
-                gap_sum: sum,
-            })
-        },
+        &mut |it, _, gaps| report_progress(it, gaps),
     )?;
-    iterations += lm.run(
-        &mut deployments,
-        Objective::SumOfGaps {
-            floor: 1e-4 * scale,
-        },
-        total - iterations,
-        options.tolerance,
-        &mut |it, sum| {
-            progress(Progress {
-                iteration: iterations + it,
-                max_iterations: total,
-                gap_sum: sum,
-            })
-        },
-    )?;
+    let after_ls = problem.gaps(&deployments)?;
+    let gap_max_least_squares = after_ls.iter().copied().fold(0.0, Real::max);
+    match options.objective {
+        GapObjective::Sum => {
+            iterations += lm.run(
+                &mut deployments,
+                Objective::SumOfGaps {
+                    floor: 1e-4 * scale,
+                },
+                total - iterations,
+                options.tolerance,
+                &mut |it, _, gaps| report_progress(iterations + it, gaps),
+            )?;
+        }
+        GapObjective::Max => {
+            // continuation in p toward the largest gap; keep the best point seen
+            let mut best = (gap_max_least_squares, deployments.clone());
+            for p in NORM_POWERS {
+                let now = problem.gaps(&deployments)?;
+                let s = now.iter().copied().fold(0.0, Real::max);
+                let budget = ITERATIONS_PER_POWER.min(total.saturating_sub(iterations));
+                if budget == 0 || s <= 1e-9 * scale {
+                    break;
+                }
+                let base = iterations;
+                iterations += lm.run(
+                    &mut deployments,
+                    Objective::Norm {
+                        p,
+                        scale: s,
+                        quad: 1.0 / links.len() as Real,
+                    },
+                    budget,
+                    options.tolerance,
+                    &mut |it, deps, gaps| {
+                        let m = gaps.iter().copied().fold(0.0, Real::max);
+                        if m < best.0 {
+                            best = (m, deps.to_vec());
+                        }
+                        report_progress(base + it, gaps)
+                    },
+                )?;
+            }
+            deployments = best.1;
+        }
+    }
     let evaluation = evaluate(&hubs, &links, &deployments, options.expansion)?;
     let report = SolveReport {
         gap_sum_start,
+        gap_max_start,
+        gap_max_least_squares,
         gap_sum: evaluation.gaps.iter().sum(),
         gap_max: evaluation.gaps.iter().copied().fold(0.0, Real::max),
         iterations,
@@ -227,6 +295,7 @@ pub fn solve(
         iteration: total,
         max_iterations: total,
         gap_sum: report.gap_sum,
+        gap_max: report.gap_max,
     });
     Ok(Solved {
         hubs,
@@ -348,7 +417,7 @@ fn choose_sides(hubs: &[Hub], links: &[Link], policy: SidePolicy) -> Vec<Side> {
 /// its gaps fastest.
 fn choose_cases(problem: &Problem, deps: &mut [Deployment]) -> Result<(), FrameError> {
     let n = deps.len();
-    let weights = vec![1.0; problem.links.len()];
+    let weights = vec![[1.0, 0.0, 0.0]; problem.links.len()];
     let mut slope = [vec![0.0; n], vec![0.0; n]];
     for (c, case) in [AxisCase::OrthogonalToR1, AxisCase::OrthogonalToR2]
         .into_iter()
@@ -363,9 +432,16 @@ fn choose_cases(problem: &Problem, deps: &mut [Deployment]) -> Result<(), FrameE
             })
             .collect();
         let mut grad = vec![0.0; 2 * n];
+        let mut grad2 = vec![0.0; 2 * n];
         let mut diag = vec![[0.0; 3]; n];
         let mut off = vec![[0.0; 4]; problem.links.len()];
-        problem.linearise(&trial, &weights, &mut grad, &mut diag, &mut off)?;
+        problem.linearise(
+            &trial,
+            &weights,
+            [&mut grad, &mut grad2],
+            &mut diag,
+            &mut off,
+        )?;
         // gradient scaled by the curvature along phi: the decrease a Newton step would give
         for u in 0..n {
             slope[c][u] = grad[2 * u + 1] * grad[2 * u + 1] / diag[u][2].max(1e-300);
@@ -417,14 +493,17 @@ impl Problem<'_> {
             .collect()
     }
 
-    /// Gradient and Gauss-Newton blocks of `sum w_l |r_l|^2 / 2` at `deps`: per unit the
-    /// upper triangle of its 2x2 diagonal block, per link its off-diagonal 2x2 block (rows
-    /// of the smaller unit index).
+    /// Gradient and Gauss-Newton blocks at `deps` of an objective `sum_l h_l(r_l)` whose
+    /// per-link Hessian in the residual is `w_l I + v_l r_l r_l^T` and whose gradient is
+    /// `w_l r_l` (`weights[l] = [w_l, v_l]`; least squares is `[1, 0]`): gradient
+    /// `sum w_l J_l^T r_l`, blocks `sum w_l J_l^T J_l + v_l (J_l^T r_l)(J_l^T r_l)^T`. Per unit
+    /// the upper triangle of its 2x2 diagonal block, per link its off-diagonal 2x2 block
+    /// (rows of the smaller unit index).
     fn linearise(
         &self,
         deps: &[Deployment],
-        weights: &[Real],
-        grad: &mut [Real],
+        weights: &[[Real; 3]],
+        [grad, grad2]: [&mut [Real]; 2],
         diag: &mut [[Real; 3]],
         off: &mut [[Real; 4]],
     ) -> Result<(), FrameError> {
@@ -447,6 +526,7 @@ impl Problem<'_> {
             })
             .collect::<Result<_, _>>()?;
         grad.iter_mut().for_each(|g| *g = 0.0);
+        grad2.iter_mut().for_each(|g| *g = 0.0);
         diag.iter_mut().for_each(|d| *d = [0.0; 3]);
         for (li, l) in p.links.iter().enumerate() {
             let [f, g] = l.faces;
@@ -471,12 +551,14 @@ impl Problem<'_> {
                 project(-lerp(&pg[m], &pg[(m + 1) % 4], t)),
             ];
             let r = project(r);
-            let w = weights[li];
+            let [w, v, w2] = weights[li];
             let var = [2 * f, 2 * f + 1, 2 * g, 2 * g + 1];
+            let jr = cols.map(|c| c.dot(&r));
             for a in 0..4 {
-                grad[var[a]] += w * cols[a].dot(&r);
+                grad[var[a]] += w * jr[a];
+                grad2[var[a]] += w2 * jr[a];
             }
-            let jj = |a: usize, b: usize| w * cols[a].dot(&cols[b]);
+            let jj = |a: usize, b: usize| w * cols[a].dot(&cols[b]) + v * jr[a] * jr[b];
             diag[f][0] += jj(0, 0);
             diag[f][1] += jj(0, 1);
             diag[f][2] += jj(1, 1);
@@ -574,6 +656,88 @@ enum Objective {
     /// `sum gap` (the paper's objective) by iteratively reweighted least squares; gaps
     /// below `floor` (mm) are weighted as `floor`.
     SumOfGaps { floor: Real },
+    /// `scale ||gap / scale||_p + quad sum gap^2 / (2 scale)`: the p-norm of the gaps, a
+    /// smooth stand-in for the largest gap (`max <= ||g||_p <= L^(1/p) max` for `L`
+    /// links), plus a small least-squares term that keeps the other gaps low. Newton steps
+    /// on the Gauss-Newton model of the norm itself (not of its p-th power): see
+    /// [`Objective::rank_one`].
+    Norm { p: Real, scale: Real, quad: Real },
+}
+
+/// Per-link coefficients of [`Problem::linearise`] and the rank-one correction of a step.
+struct Model {
+    /// Per link `[w, v, w2]`: Hessian `w I + v r r^T` and gradient `w r` of the link's term
+    /// in its residual `r`; `w2 r` is the link's share of the vector `u` below.
+    weights: Vec<[Real; 3]>,
+    /// The step solves `(H - beta u u^T) dx = -grad` (Sherman-Morrison), `beta >= 0`.
+    beta: Real,
+}
+
+impl Objective {
+    /// The model at the current gaps.
+    fn model(&self, gaps: &[Real], out: &mut Model) {
+        out.beta = 0.0;
+        match *self {
+            Objective::LeastSquares => out.weights.iter_mut().for_each(|w| *w = [1.0, 0.0, 0.0]),
+            // majorisation: fixed weights 1 / gap_k
+            Objective::SumOfGaps { floor } => {
+                for (w, &g) in out.weights.iter_mut().zip(gaps) {
+                    *w = [1.0 / g.max(floor), 0.0, 0.0];
+                }
+            }
+            // F = s N^(1/p), N = sum (g/s)^p. In the residual r of a link, with x = g/s:
+            // grad N = p x^(p-2) / s^2 r, Hess N = p x^(p-2) / s^2 I + p (p-2) x^(p-4) / s^4 r r^T;
+            // grad F = a grad N and Hess F = a (Hess N - (1 - 1/p) / N grad N grad N^T),
+            // a = (s/p) N^(1/p - 1). The last term couples every link (a dense rank-one
+            // matrix), so it goes into beta and the vector u = grad N.
+            Objective::Norm { p, scale, quad } => {
+                let s = scale;
+                let n: Real = gaps.iter().map(|g| (g / s).powf(p)).sum();
+                if n <= 0.0 {
+                    out.weights
+                        .iter_mut()
+                        .for_each(|w| *w = [quad / s, 0.0, 0.0]);
+                    return;
+                }
+                let a = (s / p) * n.powf(1.0 / p - 1.0);
+                for (w, &g) in out.weights.iter_mut().zip(gaps) {
+                    let x = g / s;
+                    let wn = p * x.powf(p - 2.0) / (s * s);
+                    let vn = p * (p - 2.0) * x.powf(p - 4.0) / s.powi(4);
+                    // p < 4 and a closed link: the rank-one term vanishes with |r|^2
+                    let vn = if vn.is_finite() { vn } else { 0.0 };
+                    *w = [a * wn + quad / s, a * vn, wn];
+                }
+                out.beta = a * (1.0 - 1.0 / p) / n;
+            }
+        }
+    }
+
+    /// The function the steps must lower, given the model taken at the current point:
+    /// the objective itself, or the majorant for the reweighted sum of gaps.
+    fn merit(&self, gaps: &[Real], model: &Model) -> Real {
+        match *self {
+            Objective::LeastSquares => gaps.iter().map(|g| 0.5 * g * g).sum(),
+            Objective::SumOfGaps { .. } => gaps
+                .iter()
+                .zip(&model.weights)
+                .map(|(g, w)| 0.5 * w[0] * g * g)
+                .sum(),
+            Objective::Norm { p, scale, quad } => {
+                let s = scale;
+                let n: Real = gaps.iter().map(|g| (g / s).powf(p)).sum();
+                s * n.powf(1.0 / p) + quad * gaps.iter().map(|g| g * g).sum::<Real>() / (2.0 * s)
+            }
+        }
+    }
+
+    /// What the stall test watches: a figure that falls with the objective.
+    fn progress_measure(&self, gaps: &[Real], model: &Model) -> Real {
+        match *self {
+            Objective::SumOfGaps { .. } => gaps.iter().sum(),
+            _ => self.merit(gaps, model),
+        }
+    }
 }
 
 /// Levenberg-Marquardt state: the sparsity pattern and its symbolic factorisation.
@@ -581,7 +745,12 @@ struct Lm<'a> {
     problem: &'a Problem<'a>,
     symbolic: SymbolicSparseColMat<usize>,
     argsort: faer::sparse::Argsort<usize>,
-    llt_symbolic: SymbolicLlt<usize>,
+    llt_symbolic: SymbolicCholesky<usize>,
+    /// Values of the Cholesky factor and scratch space, reused by every factorisation.
+    factor: Vec<Real>,
+    scratch: MemBuffer,
+    /// Per unit `(theta_min, theta_max)`.
+    theta_bounds: Vec<(Real, Real)>,
     factorizations: usize,
 }
 
@@ -603,75 +772,112 @@ impl<'a> Lm<'a> {
         let lin = |e: &dyn std::fmt::Debug| FrameError::Linear(format!("{e:?}"));
         let (symbolic, argsort) =
             SymbolicSparseColMat::try_new_from_indices(2 * n, 2 * n, &idx).map_err(|e| lin(&e))?;
-        let llt_symbolic =
-            SymbolicLlt::try_new(symbolic.as_ref(), faer::Side::Upper).map_err(|e| lin(&e))?;
+        let threshold = SupernodalThreshold::FORCE_SUPERNODAL;
+        let llt_symbolic = factorize_symbolic_cholesky(
+            symbolic.as_ref(),
+            faer::Side::Upper,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: threshold,
+                ..Default::default()
+            },
+        )
+        .map_err(|e| lin(&e))?;
+        let req = StackReq::any_of(&[
+            llt_symbolic.factorize_numeric_llt_scratch::<Real>(Par::Seq, Default::default()),
+            llt_symbolic.solve_in_place_scratch::<Real>(2, Par::Seq),
+        ]);
+        let scratch = MemBuffer::try_new(req).map_err(|e| lin(&e))?;
         Ok(Self {
             problem,
             symbolic,
             argsort,
+            factor: vec![0.0; llt_symbolic.len_val()],
             llt_symbolic,
+            scratch,
+            theta_bounds: problem
+                .hubs
+                .iter()
+                .map(|h| (THETA_BOUNDS.0, theta_max(h)))
+                .collect(),
             factorizations: 0,
         })
     }
 
-    /// Gaps, and the weighted cost `sum w_l gap_l^2 / 2`.
-    fn cost(&self, deps: &[Deployment], weights: &[Real]) -> Result<(Vec<Real>, Real), FrameError> {
-        let gaps = self.problem.gaps(deps)?;
-        let c = gaps.iter().zip(weights).map(|(g, w)| 0.5 * w * g * g).sum();
-        Ok((gaps, c))
+    /// Box of variable `i` (`2u`: theta of unit `u`, `2u + 1`: its phi).
+    fn bounds(&self, i: usize) -> (Real, Real) {
+        if i % 2 == 0 {
+            self.theta_bounds[i / 2]
+        } else {
+            PHI_BOUNDS
+        }
     }
 
     /// Run up to `max_iterations` LM steps; returns the number of iterations used.
+    /// `visit` sees every accepted point with its gaps.
     fn run(
         &mut self,
         deps: &mut [Deployment],
         objective: Objective,
         max_iterations: usize,
         tolerance: Real,
-        progress: &mut dyn FnMut(usize, Real),
+        visit: &mut dyn FnMut(usize, &[Deployment], &[Real]),
     ) -> Result<usize, FrameError> {
         let p = self.problem;
         let n = p.hubs.len();
         let mut lambda = 1e-3;
-        let mut weights = vec![1.0; p.links.len()];
-        let (mut gaps, _) = self.cost(deps, &weights)?;
+        let mut model = Model {
+            weights: vec![[1.0, 0.0, 0.0]; p.links.len()],
+            beta: 0.0,
+        };
+        let mut gaps = p.gaps(deps)?;
         let mut grad = vec![0.0; 2 * n];
+        let mut grad2 = vec![0.0; 2 * n];
         let mut diag = vec![[0.0; 3]; n];
         let mut off = vec![[0.0; 4]; p.links.len()];
+        let mut fixed = vec![false; 2 * n];
         let mut history = Vec::with_capacity(max_iterations);
         for it in 0..max_iterations {
-            let sum: Real = gaps.iter().sum();
-            progress(it, sum);
-            // The objective being decreased: least squares, or the sum of gaps through
-            // weights 1/gap renewed every iteration. A step that lowers the weighted
-            // squares lowers the sum of gaps too (majorisation: g <= g^2/2h + h/2).
-            if let Objective::SumOfGaps { floor } = objective {
-                for (w, g) in weights.iter_mut().zip(&gaps) {
-                    *w = 1.0 / g.max(floor);
-                }
-            }
-            let cost: Real = gaps
-                .iter()
-                .zip(&weights)
-                .map(|(g, w)| 0.5 * w * g * g)
-                .sum();
-            let measure = match objective {
-                Objective::LeastSquares => cost,
-                Objective::SumOfGaps { .. } => sum,
-            };
-            if cost <= 0.0 {
+            visit(it, deps, &gaps);
+            objective.model(&gaps, &mut model);
+            let cost = objective.merit(&gaps, &model);
+            let measure = objective.progress_measure(&gaps, &model);
+            if cost <= 0.0 || !cost.is_finite() {
                 return Ok(it);
             }
             history.push(measure);
             if it >= STALL_WINDOW && history[it - STALL_WINDOW] - measure <= tolerance * measure {
                 return Ok(it);
             }
-            p.linearise(deps, &weights, &mut grad, &mut diag, &mut off)?;
-            let gnorm = grad.iter().map(|g| g.abs()).fold(0.0, Real::max);
+            p.linearise(
+                deps,
+                &model.weights,
+                [&mut grad, &mut grad2],
+                &mut diag,
+                &mut off,
+            )?;
+            // Projected Newton (Bertsekas): a variable on a bound whose gradient pushes it
+            // further out is held there for this step, so that clamping does not spoil it.
+            for (i, f) in fixed.iter_mut().enumerate() {
+                let x = if i % 2 == 0 {
+                    deps[i / 2].theta
+                } else {
+                    deps[i / 2].phi
+                };
+                let (lo, hi) = self.bounds(i);
+                let eps = 1e-9 * (hi - lo);
+                *f = (x <= lo + eps && grad[i] > 0.0) || (x >= hi - eps && grad[i] < 0.0);
+            }
+            let gnorm = grad
+                .iter()
+                .zip(&fixed)
+                .filter(|(_, f)| !**f)
+                .map(|(g, _)| g.abs())
+                .fold(0.0, Real::max);
             if gnorm <= 1e-14 * (1.0 + cost) {
                 return Ok(it);
             }
-            // damped steps until the cost decreases
+            // damped steps until the merit decreases
             let mut accepted = false;
             for _ in 0..12 {
                 let mut vals = Vec::with_capacity(3 * n + 4 * p.links.len());
@@ -680,28 +886,62 @@ impl<'a> Lm<'a> {
                     .map(|d| d[0].max(d[2]))
                     .fold(0.0, Real::max)
                     .max(1e-300);
-                for d in &diag {
+                for (u, d) in diag.iter().enumerate() {
+                    let (ft, fp) = (fixed[2 * u], fixed[2 * u + 1]);
                     vals.push(d[0] * (1.0 + lambda) + 1e-12 * dmax);
-                    vals.push(d[1]);
+                    vals.push(if ft || fp { 0.0 } else { d[1] });
                     vals.push(d[2] * (1.0 + lambda) + 1e-12 * dmax);
                 }
-                for o in &off {
-                    vals.extend_from_slice(o);
+                for (o, l) in off.iter().zip(p.links) {
+                    let (a, b) = (l.faces[0].min(l.faces[1]), l.faces[0].max(l.faces[1]));
+                    for (k, (i, j)) in [(0, 0), (0, 1), (1, 0), (1, 1)].into_iter().enumerate() {
+                        let keep = !fixed[2 * a + i] && !fixed[2 * b + j];
+                        vals.push(if keep { o[k] } else { 0.0 });
+                    }
                 }
                 let mat =
                     SparseColMat::new_from_argsort(self.symbolic.clone(), &self.argsort, &vals)
                         .map_err(|e| FrameError::Linear(format!("{e:?}")))?;
                 self.factorizations += 1;
-                let Ok(llt) = Llt::try_new_with_symbolic(
-                    self.llt_symbolic.clone(),
+                let stack = MemStack::new(&mut self.scratch);
+                let Ok(llt) = self.llt_symbolic.factorize_numeric_llt(
+                    &mut self.factor,
                     mat.as_ref(),
                     faer::Side::Upper,
+                    Default::default(),
+                    Par::Seq,
+                    stack,
+                    Default::default(),
                 ) else {
                     lambda *= 10.0;
                     continue;
                 };
-                let mut rhs = faer::Mat::<Real>::from_fn(2 * n, 1, |i, _| -grad[i]);
-                llt.solve_in_place(rhs.as_mut());
+                // columns: -grad and u (zero on held variables)
+                let mut rhs = faer::Mat::<Real>::from_fn(2 * n, 2, |i, j| match (fixed[i], j) {
+                    (true, _) => 0.0,
+                    (false, 0) => -grad[i],
+                    (false, _) => grad2[i],
+                });
+                llt.solve_in_place_with_conj(Conj::No, rhs.as_mut(), Par::Seq, stack);
+                // Sherman-Morrison: (H - beta u u^T)^-1 b = x0 + beta x1 (u.x0) / (1 - beta u.x1)
+                if model.beta > 0.0 {
+                    let (mut ux0, mut ux1) = (0.0, 0.0);
+                    for (i, u) in grad2.iter().enumerate() {
+                        if !fixed[i] {
+                            ux0 += u * rhs[(i, 0)];
+                            ux1 += u * rhs[(i, 1)];
+                        }
+                    }
+                    let denom = 1.0 - model.beta * ux1;
+                    if !(denom > 1e-9) {
+                        lambda *= 4.0;
+                        continue;
+                    }
+                    let c = model.beta * ux0 / denom;
+                    for i in 0..2 * n {
+                        rhs[(i, 0)] += c * rhs[(i, 1)];
+                    }
+                }
                 // Backtrack along this step before damping more: a rejected full step is
                 // usually a closest point jumping to another end of a side, and a shorter
                 // step along the same direction costs no new factorisation.
@@ -709,23 +949,21 @@ impl<'a> Lm<'a> {
                     let trial: Vec<Deployment> = deps
                         .iter()
                         .enumerate()
-                        .map(|(u, d)| Deployment {
-                            theta: (d.theta + fraction * rhs[(2 * u, 0)])
-                                .clamp(THETA_BOUNDS.0, theta_max(&p.hubs[u])),
-                            phi: (d.phi + fraction * rhs[(2 * u + 1, 0)])
-                                .clamp(PHI_BOUNDS.0, PHI_BOUNDS.1),
-                            ..*d
+                        .map(|(u, d)| {
+                            let (lo, hi) = self.bounds(2 * u);
+                            Deployment {
+                                theta: (d.theta + fraction * rhs[(2 * u, 0)]).clamp(lo, hi),
+                                phi: (d.phi + fraction * rhs[(2 * u + 1, 0)])
+                                    .clamp(PHI_BOUNDS.0, PHI_BOUNDS.1),
+                                ..*d
+                            }
                         })
                         .collect();
                     let step_ok = trial
                         .iter()
                         .all(|d| d.theta.is_finite() && d.phi.is_finite());
-                    let new = if step_ok {
-                        self.cost(&trial, &weights).ok()
-                    } else {
-                        None
-                    };
-                    if let Some((g, _)) = new.filter(|(_, c)| *c < cost) {
+                    let new = if step_ok { p.gaps(&trial).ok() } else { None };
+                    if let Some(g) = new.filter(|g| objective.merit(g, &model) < cost) {
                         deps.copy_from_slice(&trial);
                         gaps = g;
                         lambda = if fraction == 1.0 {
@@ -743,9 +981,11 @@ impl<'a> Lm<'a> {
                 lambda *= 4.0;
             }
             if !accepted {
+                visit(it + 1, deps, &gaps);
                 return Ok(it + 1);
             }
         }
+        visit(max_iterations, deps, &gaps);
         Ok(max_iterations)
     }
 }
