@@ -2,13 +2,16 @@
 //! shop would: read from the DXF files alone with true arcs flattened finely, every strip on
 //! exactly one sheet, inside the margin, no two parts closer than the spacing, each part's
 //! inside contours before its outline, a pierce point in scrap per contour; and
-//! `spinvalence nest` reading the build's strip DXFs by their cut layers.
+//! `spinvalence nest` reading the build's strip DXFs by their cut layers. The files are
+//! parsed and the arcs flattened here; only the point-in-polygon and point-to-segment
+//! primitives come from sv-nest (unit-tested there).
 
 use std::collections::HashMap;
 use std::fs;
 use std::path::Path;
 
 use serde_json::Value;
+use sv_nest::part::{point_in_polygon, segment_distance};
 
 use crate::build::default_build;
 use crate::util::{dxf_entities, num, read_json, Dir, DxfEntity};
@@ -43,30 +46,6 @@ fn flatten(v: &[[f64; 3]]) -> Vec<[f64; 2]> {
     out
 }
 
-fn inside(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
-    let mut c = false;
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        if (a[1] > p[1]) != (b[1] > p[1])
-            && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
-        {
-            c = !c;
-        }
-    }
-    c
-}
-
-fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
-}
-
 /// Smallest distance between two closed polylines (0 when they cross).
 fn distance(p: &[[f64; 2]], q: &[[f64; 2]]) -> f64 {
     let mut best = f64::INFINITY;
@@ -81,10 +60,10 @@ fn distance(p: &[[f64; 2]], q: &[[f64; 2]]) -> f64 {
                 return 0.0;
             }
             best = best
-                .min(point_segment(a, c, d))
-                .min(point_segment(b, c, d))
-                .min(point_segment(c, a, b))
-                .min(point_segment(d, a, b));
+                .min(segment_distance(a, c, d))
+                .min(segment_distance(b, c, d))
+                .min(segment_distance(c, a, b))
+                .min(segment_distance(d, a, b));
         }
     }
     best
@@ -111,7 +90,7 @@ struct SheetPart {
 
 impl SheetPart {
     fn material(&self, p: [f64; 2]) -> bool {
-        inside(p, &self.outline) && !self.holes.iter().any(|h| inside(p, h))
+        point_in_polygon(p, &self.outline) && !self.holes.iter().any(|h| point_in_polygon(p, h))
     }
 }
 
@@ -132,7 +111,7 @@ fn parts_of(name: &str, entities: &[DxfEntity]) -> Vec<SheetPart> {
         }
         for h in &pending {
             assert!(
-                h.iter().all(|&p| inside(p, &pts)),
+                h.iter().all(|&p| point_in_polygon(p, &pts)),
                 "{name}: an INSIDE contour is not within the OUTSIDE contour written after it"
             );
         }

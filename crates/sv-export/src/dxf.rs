@@ -72,6 +72,20 @@ fn table_head(o: &mut Out, name: &str, handle: &str, count: usize) {
     o.pair(70, count);
 }
 
+/// The head of a BLOCK or ENDBLK record of `owner` (on paper space when `paper`).
+fn block_head(o: &mut Out, kind: &str, owner: &str, paper: bool, subclass: &str) {
+    let h = o.handle();
+    o.pair(0, kind);
+    o.pair(5, h);
+    o.pair(330, owner);
+    o.pair(100, "AcDbEntity");
+    if paper {
+        o.pair(67, 1);
+    }
+    o.pair(8, "0");
+    o.pair(100, subclass);
+}
+
 fn record_head(o: &mut Out, kind: &str, owner: &str, subclass: &str) -> String {
     let h = o.handle();
     o.pair(0, kind);
@@ -310,16 +324,7 @@ impl Drawing {
             (H_MODEL_BR, "*Model_Space", false),
             (H_PAPER_BR, "*Paper_Space", true),
         ] {
-            let h = o.handle();
-            o.pair(0, "BLOCK");
-            o.pair(5, h);
-            o.pair(330, owner);
-            o.pair(100, "AcDbEntity");
-            if paper {
-                o.pair(67, 1);
-            }
-            o.pair(8, "0");
-            o.pair(100, "AcDbBlockBegin");
+            block_head(&mut o, "BLOCK", owner, paper, "AcDbBlockBegin");
             o.pair(2, name);
             o.pair(70, 0);
             o.real(10, 0.0);
@@ -327,16 +332,7 @@ impl Drawing {
             o.real(30, 0.0);
             o.pair(3, name);
             o.pair(1, "");
-            let h = o.handle();
-            o.pair(0, "ENDBLK");
-            o.pair(5, h);
-            o.pair(330, owner);
-            o.pair(100, "AcDbEntity");
-            if paper {
-                o.pair(67, 1);
-            }
-            o.pair(8, "0");
-            o.pair(100, "AcDbBlockEnd");
+            block_head(&mut o, "ENDBLK", owner, paper, "AcDbBlockEnd");
         }
         o.pair(0, "ENDSEC");
         // ENTITIES

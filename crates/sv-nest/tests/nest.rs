@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use sv_nest::part::segments_intersect;
+use sv_nest::part::{point_in_polygon, segment_distance, segments_intersect};
 use sv_nest::{
     nest_sheets, nest_strip, Contour, NestOptions, NestReport, Part, StockSheet, StripInstance,
     StripOptions, Vertex,
@@ -85,33 +85,10 @@ fn small_opts() -> NestOptions {
     }
 }
 
-fn seg_dist(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a[0] + t * dx - p[0]).hypot(a[1] + t * dy - p[1])
-}
-
-fn point_in(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
-    let mut inside = false;
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        if (a[1] > p[1]) != (b[1] > p[1])
-            && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
-        {
-            inside = !inside;
-        }
-    }
-    inside
-}
 
 /// Minimum distance between two polygons (0 if they intersect or one contains the other).
 fn poly_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
-    if point_in(a[0], b) || point_in(b[0], a) {
+    if point_in_polygon(a[0], b) || point_in_polygon(b[0], a) {
         return 0.0;
     }
     let mut d = f64::MAX;
@@ -123,10 +100,10 @@ fn poly_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
                 return 0.0;
             }
             d = d
-                .min(seg_dist(a0, a1, b0))
-                .min(seg_dist(a0, a1, b1))
-                .min(seg_dist(b0, b1, a0))
-                .min(seg_dist(b0, b1, a1));
+                .min(segment_distance(b0, a0, a1))
+                .min(segment_distance(b1, a0, a1))
+                .min(segment_distance(a0, b0, b1))
+                .min(segment_distance(a1, b0, b1));
         }
     }
     d
