@@ -4,6 +4,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use jagua_rs::entities::Item;
+use jagua_rs::geometry::fail_fast::SPSurrogateConfig;
 use jagua_rs::geometry::geo_enums::RotationRange;
 use jagua_rs::geometry::primitives::{Point, SPolygon};
 use jagua_rs::geometry::shape_modification::{offset_shape, ShapeModifyConfig, ShapeModifyMode};
@@ -12,7 +13,7 @@ use jagua_rs::io::import::centering_transformation;
 use rand::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{rect, rotated_bbox, Bin, Budget, Rng64, CDE_CONFIG};
+use crate::engine::{rect, rotated_bbox, Bin, Budget, Rng64};
 use crate::part::polygon_area;
 use crate::strip::Progress;
 use crate::{NestError, Part, DEFAULT_FLATTEN_TOLERANCE};
@@ -94,6 +95,16 @@ pub struct StockSheet {
 /// Largest area growth (ratio) when jagua-rs simplifies an outline for collision checks;
 /// simplification only adds area, so spacing still holds.
 const SIMPLIFY_TOLERANCE: f32 = 0.001;
+
+/// Pole surrogates of sheet parts: fewer poles than the strip-packing benchmark items get.
+/// Fabrication parts have hundreds of vertices (a 19-unit strip at 110 mm: about 580), and
+/// the poles cost about linear time each in the vertex count: 64 poles took 160 ms per
+/// such part, more than a short nesting budget.
+const SHEET_SURROGATE: SPSurrogateConfig = SPSurrogateConfig {
+    n_pole_limits: [(24, 0.0), (12, 0.8), (6, 0.9)],
+    ff_pole_area_ratio: 0.0,
+    n_ff_piers: 0,
+};
 
 /// Options of [`nest_sheets`].
 #[derive(Clone, Debug)]
@@ -333,16 +344,7 @@ pub fn nest_sheets(
             },
         };
         let item = AllowedOrientations::new(range.clone(), vec![])
-            .and_then(|ao| {
-                Item::new(
-                    pi,
-                    pi as u64,
-                    orig,
-                    ao,
-                    None,
-                    CDE_CONFIG.item_surrogate_config,
-                )
-            })
+            .and_then(|ao| Item::new(pi, pi as u64, orig, ao, None, SHEET_SURROGATE))
             .map(Arc::new)
             .map_err(|e| bad(format!("part {}: {e:#}", part.id)))?;
         // fits some sheet in some rotation?

@@ -85,7 +85,6 @@ fn small_opts() -> NestOptions {
     }
 }
 
-
 /// Minimum distance between two polygons (0 if they intersect or one contains the other).
 fn poly_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
     if point_in_polygon(a[0], b) || point_in_polygon(b[0], a) {
