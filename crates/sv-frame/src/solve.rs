@@ -740,6 +740,9 @@ impl Objective {
     }
 }
 
+/// What [`Lm::run`] calls at every accepted point: iteration, deployments, gaps.
+type Visit<'a> = dyn FnMut(usize, &[Deployment], &[Real]) + 'a;
+
 /// Levenberg-Marquardt state: the sparsity pattern and its symbolic factorisation.
 struct Lm<'a> {
     problem: &'a Problem<'a>,
@@ -806,7 +809,7 @@ impl<'a> Lm<'a> {
 
     /// Box of variable `i` (`2u`: theta of unit `u`, `2u + 1`: its phi).
     fn bounds(&self, i: usize) -> (Real, Real) {
-        if i % 2 == 0 {
+        if i.is_multiple_of(2) {
             self.theta_bounds[i / 2]
         } else {
             PHI_BOUNDS
@@ -821,7 +824,7 @@ impl<'a> Lm<'a> {
         objective: Objective,
         max_iterations: usize,
         tolerance: Real,
-        visit: &mut dyn FnMut(usize, &[Deployment], &[Real]),
+        visit: &mut Visit<'_>,
     ) -> Result<usize, FrameError> {
         let p = self.problem;
         let n = p.hubs.len();
@@ -933,7 +936,8 @@ impl<'a> Lm<'a> {
                         }
                     }
                     let denom = 1.0 - model.beta * ux1;
-                    if !(denom > 1e-9) {
+                    // NaN included: no usable rank-one correction, damp harder
+                    if denom.is_nan() || denom <= 1e-9 {
                         lambda *= 4.0;
                         continue;
                     }

@@ -4,10 +4,6 @@ use sv_surface::{
     build_secondary, builtin_target, initial_grid, SecondaryOptions, SurfaceError, TargetMesh,
 };
 
-fn run(name: &str, unit: f64) -> sv_surface::SecondaryReport {
-    run_with_mesh(name, unit).1
-}
-
 /// The largest link gap of the primary solve on `mesh` (default options: min-max) as a
 /// fraction of the mean edge; also solves with the sum objective and checks that min-max
 /// leaves no larger worst gap.
@@ -31,7 +27,7 @@ fn worst_gap(name: &str, mesh: &sv_frame::QuadMesh, mean_edge: f64) -> f64 {
     max.report.gap_max / mean_edge
 }
 
-fn run_with_mesh(name: &str, unit: f64) -> (sv_frame::QuadMesh, sv_surface::SecondaryReport) {
+fn run(name: &str, unit: f64) -> (sv_frame::QuadMesh, sv_surface::SecondaryReport) {
     let target = builtin_target(name).unwrap();
     let opts = SecondaryOptions {
         unit_size: unit,
@@ -85,7 +81,7 @@ fn run_with_mesh(name: &str, unit: f64) -> (sv_frame::QuadMesh, sv_surface::Seco
 #[test]
 fn every_builtin_meets_every_goal_at_300() {
     for name in sv_surface::BUILTIN_NAMES {
-        let (mesh, r) = run_with_mesh(name, 300.0);
+        let (mesh, r) = run(name, 300.0);
         // square corners: corner faces are rhombi too (the worst face fits its rhombus
         // within a tenth of the side)
         assert!(r.rhombus_fit_max < 0.1, "{name}: fit {}", r.rhombus_fit_max);
@@ -98,7 +94,7 @@ fn every_builtin_meets_every_goal_at_300() {
 #[test]
 fn every_builtin_meets_every_goal_at_150() {
     for name in sv_surface::BUILTIN_NAMES {
-        let (mesh, r) = run_with_mesh(name, 150.0);
+        let (mesh, r) = run(name, 150.0);
         let gap = worst_gap(name, &mesh, r.mean_edge);
         assert!(gap <= 0.05, "{name} 150: gap max {gap:.4} of the side");
     }
@@ -107,7 +103,7 @@ fn every_builtin_meets_every_goal_at_150() {
 #[test]
 fn hypar_like_saddle_meets_every_goal_at_110() {
     // the issue's ~1,000-unit benchmark build (1,444 faces)
-    let (mesh, r) = run_with_mesh("saddle", 110.0);
+    let (mesh, r) = run("saddle", 110.0);
     assert!(r.faces > 1000, "{} faces", r.faces);
     let gap = worst_gap("saddle", &mesh, r.mean_edge);
     assert!(gap <= 0.05, "saddle 110: gap max {gap:.4} of the side");
