@@ -1,10 +1,12 @@
 //! Writes the DXF and SVG of every strip of a sphere cap and of the default pavilion build
-//! and checks them, the DXF with
-//! ezdxf's auditor (an independent reader). The test creates the Python venv with ezdxf
-//! under `target/ezdxf-venv` when it is missing; it never skips.
+//! and checks them, the DXF with the nesting's DXF reader and with
+//! ezdxf's auditor (an independent reader, `tests/ezdxf/mod.rs`).
+
+mod ezdxf;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+use ezdxf::audit;
 
 use sv_frame::{solve, QuadMesh, SolveOptions};
 use sv_strips::{profile_strip, unit_labels, unroll, ProfileParams, StripOptions, StripProfile};
@@ -51,36 +53,6 @@ fn out_dir() -> PathBuf {
     d
 }
 
-fn venv_python() -> PathBuf {
-    let target = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target");
-    let venv = target.join("ezdxf-venv");
-    let python = venv.join("bin/python3");
-    let has_ezdxf = |p: &Path| {
-        Command::new(p)
-            .args(["-c", "import ezdxf"])
-            .status()
-            .map(|s| s.success())
-            .unwrap_or(false)
-    };
-    if !has_ezdxf(&python) {
-        let ok = Command::new("python3")
-            .args(["-m", "venv"])
-            .arg(&venv)
-            .status()
-            .expect("python3 is needed to audit DXF files with ezdxf")
-            .success();
-        assert!(ok, "could not create {}", venv.display());
-        let ok = Command::new(venv.join("bin/pip"))
-            .args(["install", "-q", "ezdxf"])
-            .status()
-            .expect("pip")
-            .success();
-        assert!(ok, "could not install ezdxf into {}", venv.display());
-    }
-    assert!(has_ezdxf(&python));
-    python
-}
-
 #[test]
 fn every_strip_dxf_passes_the_ezdxf_audit() {
     let dir = out_dir();
@@ -92,32 +64,24 @@ fn every_strip_dxf_passes_the_ezdxf_audit() {
         assert!(dxf.contains("$INSUNITS\n 70\n4"));
         assert!(dxf.matches("\nLWPOLYLINE\n").count() > p.cuts.len());
         assert!(dxf.ends_with("  0\nEOF\n"));
+        // read back by the nesting's DXF reader: one part (the OUTSIDE outline) with every
+        // INSIDE slot as a hole; the INFO tiles, pins and title and the ETCH text are skipped
+        let back = sv_nest::dxf::parse_parts(&dxf, &s.id).unwrap();
+        assert!(back.rejected.is_empty(), "{}: {:?}", s.id, back.rejected);
+        assert_eq!(back.parts.len(), 1, "{}: one part per outline", s.id);
+        assert_eq!(back.parts[0].id, s.id);
+        assert_eq!(back.parts[0].holes.len(), p.cuts.len(), "{}: holes", s.id);
+        assert_eq!(
+            back.parts[0].outer.vertices.len(),
+            p.outline.0.len(),
+            "{}: the outline as written",
+            s.id
+        );
         let path = dir.join(format!("{}.dxf", s.id));
         std::fs::write(&path, dxf).unwrap();
         files.push(path);
     }
     audit(&files, false);
-}
-
-fn audit(files: &[PathBuf], sheets: bool) -> String {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/audit_dxf.py");
-    let mut cmd = Command::new(venv_python());
-    cmd.arg(script);
-    if sheets {
-        cmd.arg("--sheets");
-    }
-    let out = cmd.args(files).output().unwrap();
-    let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "{text}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(
-        text.contains(&format!("audited {} file(s)", files.len())),
-        "{text}"
-    );
-    text
 }
 
 /// The strips nested onto sheets (a fixed evaluation budget: the same layout every run),

@@ -6,8 +6,10 @@
 //!
 //! Layers: the plasma-shop layers `ETCH` (etched marks) and `INFO` (never cut: nominal
 //! tiles, titles, sheet outline, pierce points) are ignored, so the strip and sheet
-//! drawings of spinvalence read back as their cut contours (`OUTSIDE` outlines, `INSIDE`
-//! holes). Every other layer is read.
+//! drawings of spinvalence read back as their cut contours. In a file with an `OUTSIDE`
+//! layer, its closed contours are the part outlines and every other cut contour (`INSIDE`)
+//! is a hole of the smallest outline containing it (one outside every outline is rejected
+//! by name); a file without one (layer `0` and the like) is nested by containment alone.
 
 use std::path::Path;
 
@@ -44,6 +46,13 @@ struct Seg {
     a: [f64; 2],
     b: [f64; 2],
     bulge: f64,
+    outside: bool,
+}
+
+/// A closed contour read from the file and whether it is on the `OUTSIDE` layer.
+struct Read {
+    contour: Contour,
+    outside: bool,
 }
 
 /// Parses DXF text; `name` prefixes part ids.
@@ -102,14 +111,16 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
             .filter(|x| x.is_finite())
             .ok_or_else(|| err(line, &format!("bad number {v:?}")))
     };
-    let mut contours: Vec<Contour> = Vec::new();
+    let mut contours: Vec<Read> = Vec::new();
     let mut segs: Vec<Seg> = Vec::new();
     let mut rejected = Vec::new();
     let mut e = 0;
     while e < ents.len() {
         let ent = ents[e];
         let kind = ent[0].1;
-        if kind != "VERTEX" && kind != "SEQEND" && not_cut(&layer_of(ent)) {
+        let layer = layer_of(ent);
+        let outside = layer == "OUTSIDE";
+        if kind != "VERTEX" && kind != "SEQEND" && not_cut(&layer) {
             // skip the entity (with the vertices of a POLYLINE)
             e += 1;
             while kind == "POLYLINE"
@@ -143,14 +154,8 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
                         _ => {}
                     }
                 }
-                push_polyline(
-                    vs,
-                    flags & 1 == 1,
-                    ent[0].2,
-                    name,
-                    &mut contours,
-                    &mut rejected,
-                );
+                let at = (ent[0].2, outside);
+                push_polyline(vs, flags & 1 == 1, at, name, &mut contours, &mut rejected);
             }
             "POLYLINE" => {
                 let flags = getf(70, 0.0)? as i64;
@@ -174,19 +179,16 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
                 if !(e < ents.len() && ents[e][0].1 == "SEQEND") {
                     e -= 1;
                 }
-                push_polyline(
-                    vs,
-                    flags & 1 == 1,
-                    ent[0].2,
-                    name,
-                    &mut contours,
-                    &mut rejected,
-                );
+                let at = (ent[0].2, outside);
+                push_polyline(vs, flags & 1 == 1, at, name, &mut contours, &mut rejected);
             }
             "CIRCLE" => {
                 let r = getf(40, 0.0)?;
                 if r > 0.0 {
-                    contours.push(Contour::circle(getf(10, 0.0)?, getf(20, 0.0)?, r));
+                    contours.push(Read {
+                        contour: Contour::circle(getf(10, 0.0)?, getf(20, 0.0)?, r),
+                        outside,
+                    });
                 } else {
                     rejected.push(NestError::BadPart {
                         part: format!("{name} (circle at line {})", ent[0].2),
@@ -198,6 +200,7 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
                 a: [getf(10, 0.0)?, getf(20, 0.0)?],
                 b: [getf(11, 0.0)?, getf(21, 0.0)?],
                 bulge: 0.0,
+                outside,
             }),
             "ARC" => {
                 let (cx, cy, r) = (getf(10, 0.0)?, getf(20, 0.0)?, getf(40, 0.0)?);
@@ -211,6 +214,7 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
                     a: p(a0),
                     b: p(a1),
                     bulge: (sweep / 4.0).tan(),
+                    outside,
                 });
             }
             _ => {}
@@ -218,16 +222,20 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
         e += 1;
     }
     chain(segs, name, &mut contours, &mut rejected);
-    let parts = group(contours, name);
+    let parts = if contours.iter().any(|c| c.outside) {
+        by_layer(contours, name, &mut rejected)
+    } else {
+        group(contours.into_iter().map(|c| c.contour).collect(), name)
+    };
     Ok(DxfParts { parts, rejected })
 }
 
 fn push_polyline(
     mut vs: Vec<Vertex>,
     closed_flag: bool,
-    line: usize,
+    (line, outside): (usize, bool),
     name: &str,
-    out: &mut Vec<Contour>,
+    out: &mut Vec<Read>,
     rejected: &mut Vec<NestError>,
 ) {
     let same = |a: &Vertex, b: &Vertex| (a.x - b.x).abs() < 1e-9 && (a.y - b.y).abs() < 1e-9;
@@ -246,11 +254,14 @@ fn push_polyline(
             reason: "fewer than 2 vertices (zero size)".into(),
         });
     } else {
-        out.push(Contour { vertices: vs });
+        out.push(Read {
+            contour: Contour { vertices: vs },
+            outside,
+        });
     }
 }
 
-fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Contour>, rejected: &mut Vec<NestError>) {
+fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Read>, rejected: &mut Vec<NestError>) {
     let tol = DEFAULT_CHAIN_TOLERANCE;
     let close = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]) <= tol;
     while let Some(first) = segs.pop() {
@@ -271,6 +282,7 @@ fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Contour>, rejected: &mut 
                             a: s.b,
                             b: s.a,
                             bulge: -s.bulge,
+                            outside: s.outside,
                         }
                     });
                 }
@@ -278,15 +290,18 @@ fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Contour>, rejected: &mut 
             }
         }
         if close(chain[chain.len() - 1].b, chain[0].a) {
-            out.push(Contour {
-                vertices: chain
-                    .iter()
-                    .map(|s| Vertex {
-                        x: s.a[0],
-                        y: s.a[1],
-                        bulge: s.bulge,
-                    })
-                    .collect(),
+            out.push(Read {
+                contour: Contour {
+                    vertices: chain
+                        .iter()
+                        .map(|s| Vertex {
+                            x: s.a[0],
+                            y: s.a[1],
+                            bulge: s.bulge,
+                        })
+                        .collect(),
+                },
+                outside: chain[0].outside,
             });
         } else {
             let p = chain[0].a;
@@ -296,6 +311,51 @@ fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Contour>, rejected: &mut 
             });
         }
     }
+}
+
+/// Part ids: the file's name, with `#k` when it holds several parts.
+fn part_id(name: &str, k: usize, count: usize) -> String {
+    if count == 1 {
+        name.to_string()
+    } else {
+        format!("{name}#{}", k + 1)
+    }
+}
+
+/// Parts of a file with shop layers: each `OUTSIDE` contour is an outline (in file order),
+/// every other contour a hole of the smallest outline containing its first point.
+fn by_layer(contours: Vec<Read>, name: &str, rejected: &mut Vec<NestError>) -> Vec<Part> {
+    let tol = 0.01;
+    let (outer, inner): (Vec<Read>, Vec<Read>) = contours.into_iter().partition(|c| c.outside);
+    let flat: Vec<Vec<[f64; 2]>> = outer.iter().map(|c| c.contour.flatten(tol)).collect();
+    let area: Vec<f64> = flat.iter().map(|f| polygon_area(f).abs()).collect();
+    let count = outer.len();
+    let mut parts: Vec<Part> = outer
+        .into_iter()
+        .enumerate()
+        .map(|(k, c)| Part {
+            id: part_id(name, k, count),
+            outer: c.contour,
+            holes: Vec::new(),
+        })
+        .collect();
+    for h in inner {
+        let probe = h.contour.vertices[0];
+        let home = (0..parts.len())
+            .filter(|&k| point_in_polygon([probe.x, probe.y], &flat[k]))
+            .min_by(|&a, &b| area[a].total_cmp(&area[b]));
+        match home {
+            Some(k) => parts[k].holes.push(h.contour),
+            None => rejected.push(NestError::BadPart {
+                part: format!(
+                    "{name} (inside contour at ({:.3}, {:.3}))",
+                    probe.x, probe.y
+                ),
+                reason: "not within any OUTSIDE outline".into(),
+            }),
+        }
+    }
+    parts
 }
 
 fn group(contours: Vec<Contour>, name: &str) -> Vec<Part> {
@@ -324,16 +384,11 @@ fn group(contours: Vec<Contour>, name: &str) -> Vec<Part> {
         d
     };
     let outers: Vec<usize> = idx.iter().copied().filter(|&c| depth(c) % 2 == 0).collect();
-    let single = outers.len() == 1;
     outers
         .iter()
         .enumerate()
         .map(|(k, &o)| Part {
-            id: if single {
-                name.to_string()
-            } else {
-                format!("{name}#{}", k + 1)
-            },
+            id: part_id(name, k, outers.len()),
             outer: contours[o].clone(),
             holes: idx
                 .iter()

@@ -341,6 +341,67 @@ fn dxf_line_arc_chain_and_polyline() {
     assert!(sv_nest::dxf::parse_parts("garbage\n", "bad").is_err());
 }
 
+/// A closed LWPOLYLINE of straight edges on `layer`.
+fn lw(layer: &str, pts: &[[f64; 2]]) -> String {
+    let mut s = format!("0\nLWPOLYLINE\n8\n{layer}\n90\n{}\n70\n1\n", pts.len());
+    for p in pts {
+        s += &format!("10\n{}\n20\n{}\n", p[0], p[1]);
+    }
+    s
+}
+
+fn square(x: f64, y: f64, s: f64) -> [[f64; 2]; 4] {
+    [[x, y], [x + s, y], [x + s, y + s], [x, y + s]]
+}
+
+/// Shop layers: OUTSIDE contours are the outlines, INSIDE ones holes of the outline around
+/// them; INFO (closed tiles, sheet outline, text) and ETCH are not parts. A part inside
+/// another's hole (part in part on a sheet) is a part of its own.
+#[test]
+fn dxf_shop_layers_outlines_holes_and_what_is_not_cut() {
+    let mut text = String::from("0\nSECTION\n2\nENTITIES\n");
+    // a sheet outline and a nominal tile on INFO, etched lines, a label
+    text += &lw("INFO", &square(-10.0, -10.0, 2000.0));
+    text += &lw("INFO", &square(5.0, 5.0, 90.0));
+    text += &lw("ETCH", &square(20.0, 20.0, 5.0));
+    text += "0\nTEXT\n8\nINFO\n10\n0\n20\n0\n40\n5\n1\nA01\n";
+    // part 1: a 100 mm square with two slots
+    text += &lw("INSIDE", &square(10.0, 10.0, 20.0));
+    text += &lw("INSIDE", &square(60.0, 60.0, 20.0));
+    text += &lw("OUTSIDE", &square(0.0, 0.0, 100.0));
+    // part 2: a 400 mm square with a 300 mm hole holding part 3 (40 mm, one slot)
+    text += &lw("INSIDE", &square(550.0, 50.0, 300.0));
+    text += &lw("OUTSIDE", &square(500.0, 0.0, 400.0));
+    text += &lw("INSIDE", &square(610.0, 110.0, 10.0));
+    text += &lw("OUTSIDE", &square(600.0, 100.0, 40.0));
+    // a slot in no outline
+    text += &lw("INSIDE", &square(1500.0, 1500.0, 10.0));
+    text += "0\nENDSEC\n0\nEOF\n";
+    let read = sv_nest::dxf::parse_parts(&text, "sheet").unwrap();
+    let holes: Vec<(String, usize)> = read
+        .parts
+        .iter()
+        .map(|p| (p.id.clone(), p.holes.len()))
+        .collect();
+    assert_eq!(
+        holes,
+        [
+            ("sheet#1".to_string(), 2),
+            ("sheet#2".to_string(), 1),
+            ("sheet#3".to_string(), 1)
+        ]
+    );
+    assert_eq!(read.rejected.len(), 1, "{:?}", read.rejected);
+    let why = read.rejected[0].to_string();
+    assert!(why.contains("sheet") && why.contains("OUTSIDE"), "{why}");
+    // without shop layers the same contours nest by containment
+    let generic = text
+        .replace("\n8\nINSIDE\n", "\n8\n0\n")
+        .replace("\n8\nOUTSIDE\n", "\n8\n0\n");
+    let read = sv_nest::dxf::parse_parts(&generic, "sheet").unwrap();
+    assert_eq!(read.parts.len(), 4, "the stray slot is a part of its own");
+}
+
 fn dataset(name: &str) -> std::path::PathBuf {
     std::path::PathBuf::from(format!("/work/shared/datasets/nesting/spp/{name}.json"))
 }

@@ -1,0 +1,64 @@
+//! ezdxf's auditor (an independent DXF reader) over files we wrote: shared by the sv-export
+//! tests and the end-to-end tests (`#[path]`-included there). The Python venv with ezdxf is
+//! created under `target/ezdxf-venv` when it is missing; the check never skips.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// `crates/` of the workspace (this file is included by tests of several crates).
+fn crates_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The venv's python with ezdxf installed.
+pub fn venv_python() -> PathBuf {
+    let venv = crates_dir().join("../target/ezdxf-venv");
+    let python = venv.join("bin/python3");
+    let has_ezdxf = |p: &Path| {
+        Command::new(p)
+            .args(["-c", "import ezdxf"])
+            .status()
+            .map(|s| s.success())
+            .unwrap_or(false)
+    };
+    if !has_ezdxf(&python) {
+        let ok = Command::new("python3")
+            .args(["-m", "venv"])
+            .arg(&venv)
+            .status()
+            .expect("python3 is needed to audit DXF files with ezdxf")
+            .success();
+        assert!(ok, "could not create {}", venv.display());
+        let ok = Command::new(venv.join("bin/pip"))
+            .args(["install", "-q", "ezdxf"])
+            .status()
+            .expect("pip")
+            .success();
+        assert!(ok, "could not install ezdxf into {}", venv.display());
+    }
+    assert!(has_ezdxf(&python));
+    python
+}
+
+/// Run `audit_dxf.py` (ezdxf's auditor plus the shop conventions; `sheets`: the files are
+/// nested sheets) over `files`, panicking with its report unless every file is clean.
+pub fn audit(files: &[PathBuf], sheets: bool) -> String {
+    let script = crates_dir().join("sv-export/tests/audit_dxf.py");
+    let mut cmd = Command::new(venv_python());
+    cmd.arg(script);
+    if sheets {
+        cmd.arg("--sheets");
+    }
+    let out = cmd.args(files).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains(&format!("audited {} file(s)", files.len())),
+        "{text}"
+    );
+    text
+}
