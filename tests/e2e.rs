@@ -7,6 +7,9 @@ mod util;
 #[path = "e2e/fixtures.rs"]
 mod fixtures;
 
+#[path = "../crates/sv-export/tests/ezdxf/mod.rs"]
+mod ezdxf;
+
 #[path = "e2e/bad_input.rs"]
 mod bad_input;
 #[path = "e2e/build.rs"]

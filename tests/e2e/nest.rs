@@ -134,6 +134,12 @@ fn bad_nest_input_is_one_line() {
     for (args, needle) in [
         (vec!["a.dxf", "--sheet", "3000"], "--sheet"),
         (vec!["a.dxf", "--sheet", "0x100"], "--sheet"),
+        (vec!["a.dxf", "--sheet", "0x1500"], "--sheet \"0x1500\""),
+        (vec!["a.dxf", "--sheet", "-5x10"], "--sheet \"-5x10\""),
+        (
+            vec!["a.dxf", "--sheet", "3000x1500,-1x2"],
+            "--sheet \"-1x2\"",
+        ),
         (vec!["a.dxf", "--margin", "-1"], "--margin"),
         (vec!["a.dxf", "--nest-seconds", "0"], "--nest-seconds"),
         (vec!["garbage.dxf"], "nothing to nest"),

@@ -14,6 +14,7 @@ use serde_json::Value;
 use sv_nest::part::{point_in_polygon, segment_distance};
 
 use crate::build::default_build;
+use crate::ezdxf::audit;
 use crate::util::{dxf_entities, num, read_json, Dir, DxfEntity};
 
 /// Chord error (mm) of the arc flattening below.
@@ -127,47 +128,42 @@ fn parts_of(name: &str, entities: &[DxfEntity]) -> Vec<SheetPart> {
     parts
 }
 
-#[test]
-fn build_sheets_hold_every_strip_once_inside_the_margin_and_apart() {
-    let (dir, out) = default_build();
-    out.expect_code(0);
-    let out_dir = dir.join("out");
+/// Every acceptance point of the sheets in `DIR/nest.json` + `DIR/sheets/` (`dir/out`),
+/// read from the DXF files alone: each part in `ids` placed once in `nest.json` and
+/// labelled once on the sheets, nothing left out, file names with `_tTHICKmm`, R2000 in
+/// mm without splines, the sheet outline on INFO, every part inside the margin, parts at
+/// least the spacing apart (arcs flattened to [`CHORD`]), inside contours before their
+/// outline, one pierce point per contour in scrap, the offcut clear, and ezdxf's audit
+/// clean. Returns `nest.json` and the outline area of all parts (mm^2).
+fn check_sheets(dir: &Dir, out: &str, ids: &[&str], thickness: &str) -> (Value, f64) {
+    let out_dir = dir.join(out);
     let nest = read_json(&out_dir.join("nest.json"));
-    let strips = read_json(&out_dir.join("strips.json"));
     let spec = &nest["sheet"];
     let (margin, spacing) = (
         num(&spec["margin"], "margin"),
         num(&spec["spacing"], "spacing"),
     );
-    let profile = &strips["params"];
-    assert!(
-        spacing >= num(&profile["kerf"], "kerf"),
-        "spacing {spacing} below the kerf"
-    );
     let sheets = nest["sheets"].as_array().unwrap();
     assert!(!sheets.is_empty());
     assert!(nest["left_out"].as_array().unwrap().is_empty(), "{nest}");
-    let ids: Vec<&str> = strips["strips"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|s| s["id"].as_str().unwrap())
-        .collect();
     let mut placed: HashMap<String, usize> = HashMap::new();
     let mut labelled: HashMap<String, usize> = HashMap::new();
-    let mut files = dir.entries("out/sheets");
+    let mut files = dir.entries(&format!("{out}/sheets"));
     files.sort();
     assert_eq!(files.len(), 2 * sheets.len(), "{files:?}");
+    let mut dxfs = Vec::new();
     let mut outline_area = 0.0;
     for (i, sheet) in sheets.iter().enumerate() {
         let (w, h) = (
             num(&sheet["width"], "width"),
             num(&sheet["height"], "height"),
         );
-        let stem = format!("sheet-{:02}_{}x{}mm_t3mm", i + 1, w, h);
+        let stem = format!("sheet-{:02}_{}x{}mm_t{thickness}mm", i + 1, w, h);
         assert!(files.contains(&format!("{stem}.dxf")), "{stem}: {files:?}");
         assert!(files.contains(&format!("{stem}.svg")), "{stem}: {files:?}");
-        let text = fs::read_to_string(out_dir.join(format!("sheets/{stem}.dxf"))).unwrap();
+        let path = out_dir.join(format!("sheets/{stem}.dxf"));
+        let text = fs::read_to_string(&path).unwrap();
+        dxfs.push(path);
         assert!(text.contains("$ACADVER\n  1\nAC1015") && text.contains("$INSUNITS\n 70\n4"));
         assert!(!text.contains("SPLINE"), "{stem}: splines");
         let entities = dxf_entities(&text);
@@ -188,7 +184,7 @@ fn build_sheets_hold_every_strip_once_inside_the_margin_and_apart() {
                 && bbox(&flatten(&e.vertices)) == ([0.0, 0.0], [w, h])),
             "{stem}: no sheet outline on INFO"
         );
-        // labels for people: one TEXT per strip on INFO
+        // labels for people: one TEXT per part on INFO
         for e in entities.iter().filter(|e| e.kind == "TEXT") {
             assert_eq!(e.layer, "INFO", "{stem}: text off INFO");
             if ids.contains(&e.text.as_str()) {
@@ -267,7 +263,7 @@ fn build_sheets_hold_every_strip_once_inside_the_margin_and_apart() {
             }
         }
     }
-    for id in &ids {
+    for id in ids {
         assert_eq!(placed.get(*id), Some(&1), "{id} placed once in nest.json");
         assert_eq!(
             labelled.get(*id),
@@ -276,8 +272,39 @@ fn build_sheets_hold_every_strip_once_inside_the_margin_and_apart() {
         );
     }
     assert_eq!(placed.len(), ids.len());
+    audit(&dxfs, true);
+    (nest, outline_area)
+}
+
+/// The ids of the strips in `strips.json`.
+fn strip_ids(strips: &Value) -> Vec<&str> {
+    strips["strips"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["id"].as_str().unwrap())
+        .collect()
+}
+
+#[test]
+fn build_sheets_hold_every_strip_once_inside_the_margin_and_apart() {
+    let (dir, out) = default_build();
+    out.expect_code(0);
+    let strips = read_json(&dir.join("out/strips.json"));
+    let ids = strip_ids(&strips);
+    let (nest, outline_area) = check_sheets(dir, "out", &ids, "3");
+    let spec = &nest["sheet"];
+    let (margin, spacing) = (
+        num(&spec["margin"], "margin"),
+        num(&spec["spacing"], "spacing"),
+    );
+    assert!(
+        spacing >= num(&strips["params"]["kerf"], "kerf"),
+        "spacing {spacing} below the kerf"
+    );
     // the reported lower bound is at least the plain area bound recomputed from the DXFs,
     // and no layout beats it
+    let sheets = nest["sheets"].as_array().unwrap().len() as u64;
     let usable = (3000.0 - 2.0 * margin + spacing) * (1500.0 - 2.0 * margin + spacing);
     let area_bound = (outline_area / usable).ceil() as u64;
     let lb = nest["lower_bound_sheets"].as_u64().unwrap();
@@ -285,7 +312,29 @@ fn build_sheets_hold_every_strip_once_inside_the_margin_and_apart() {
         lb >= area_bound,
         "lower bound {lb} < area bound {area_bound}"
     );
-    assert!(sheets.len() as u64 >= lb);
+    assert!(sheets >= lb);
+    // no worse than the layout measured in docs/nesting.md: one strip per row (two never
+    // fit the usable length), four rows per sheet. The issue's goal, at most the bound + 1,
+    // is the ignored test below.
+    assert!(
+        sheets <= (ids.len() as u64).div_ceil(4),
+        "{sheets} sheets for {} strips",
+        ids.len()
+    );
+}
+
+/// The issue's goal for the pavilion: at most the lower bound + 1 sheets. Not met (10
+/// sheets against a bound of 6: docs/nesting.md says why and what would close the gap);
+/// run with `--ignored` to measure.
+#[test]
+#[ignore = "issue 5 goal not met: 10 sheets against a lower bound of 6 (docs/nesting.md)"]
+fn build_sheets_within_one_of_the_lower_bound() {
+    let (dir, out) = default_build();
+    out.expect_code(0);
+    let nest = read_json(&dir.join("out/nest.json"));
+    let sheets = nest["sheets"].as_array().unwrap().len() as u64;
+    let lb = nest["lower_bound_sheets"].as_u64().unwrap();
+    assert!(sheets <= lb + 1, "{sheets} sheets, lower bound {lb}");
 }
 
 #[test]
@@ -319,22 +368,10 @@ fn nest_reads_the_strip_dxfs_by_their_cut_layers() {
     let argv: Vec<&str> = args.iter().map(String::as_str).collect();
     let run = dir.run(&argv);
     run.expect_code(0);
-    let nest = read_json(&dir.join("n/nest.json"));
-    assert!(nest["left_out"].as_array().unwrap().is_empty(), "{nest}");
-    let mut ids: Vec<&str> = nest["sheets"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .flat_map(|s| s["placements"].as_array().unwrap())
-        .map(|p| p["strip"].as_str().unwrap())
-        .collect();
-    ids.sort();
-    let mut want: Vec<&str> = list.iter().map(|s| s["id"].as_str().unwrap()).collect();
-    want.sort();
-    assert_eq!(
-        ids, want,
-        "one part per strip DXF (INFO tiles and ETCH text are not parts)"
-    );
+    assert!(run.stderr.is_empty(), "{run:?}");
+    // the same acceptance as the build's sheets, the part ids being the file stems
+    // (one part per strip DXF: INFO tiles and ETCH text are not parts)
+    check_sheets(&dir, "n", &strip_ids(&strips), "3");
     // every slot came along as a hole
     let cuts: usize = list
         .iter()
@@ -387,12 +424,20 @@ fn bad_parts_are_named_and_left_out_while_the_others_nest() {
         "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n8\nOUTSIDE\n90\n4\n70\n1\n10\n0\n20\n0\n10\n100\n20\n100\n10\n100\n20\n0\n10\n0\n20\n100\n0\nENDSEC\n0\nEOF\n",
     );
     dir.write("garbage.dxf", "this is not a DXF\n");
+    dir.write(
+        "open.dxf",
+        "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n8\nOUTSIDE\n90\n3\n70\n0\n10\n0\n20\n0\n10\n100\n20\n0\n10\n100\n20\n50\n0\nENDSEC\n0\nEOF\n",
+    );
+    dir.write("flat.dxf", square(0.0, 0.0));
     let out = dir.run(&[
         "nest",
         "good.dxf",
         "huge.dxf",
         "bowtie.dxf",
         "garbage.dxf",
+        "open.dxf",
+        "flat.dxf",
+        "missing.dxf",
         "--nest-seconds",
         "1",
         "--out",
@@ -400,10 +445,14 @@ fn bad_parts_are_named_and_left_out_while_the_others_nest() {
     ]);
     out.expect_code(0);
     let left = left_out(&dir.join("n/nest.json"));
+    let warnings: Vec<&str> = out.stderr.lines().collect();
     for (part, why) in [
         ("huge", "larger than every sheet"),
         ("bowtie", "self-intersecting"),
         ("garbage.dxf", ""),
+        ("open", "open contour"),
+        ("flat", ""),
+        ("missing.dxf", ""),
     ] {
         assert!(
             left.iter()
@@ -411,7 +460,17 @@ fn bad_parts_are_named_and_left_out_while_the_others_nest() {
             "{part}: {left:?}"
         );
         assert!(out.stdout.contains(part), "{part} in the summary:{out:?}");
+        // one line on stderr names the part
+        assert_eq!(
+            warnings
+                .iter()
+                .filter(|l| l.starts_with("warning: ") && l.contains(part))
+                .count(),
+            1,
+            "{part}:{out:?}"
+        );
     }
+    assert_eq!(warnings.len(), left.len(), "{out:?}");
     let nest = read_json(&dir.join("n/nest.json"));
     let placed: Vec<&str> = nest["sheets"][0]["placements"]
         .as_array()
@@ -420,5 +479,5 @@ fn bad_parts_are_named_and_left_out_while_the_others_nest() {
         .map(|p| p["strip"].as_str().unwrap())
         .collect();
     assert_eq!(placed, ["good"]);
-    assert_eq!(left.len(), 3, "{left:?}");
+    assert_eq!(left.len(), 6, "{left:?}");
 }

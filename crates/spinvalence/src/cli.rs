@@ -94,7 +94,8 @@ Writes DIR/nest.json and, per sheet, DIR/sheets/sheet-NN_WxHmm[_tTmm].dxf (layer
 INSIDE, ETCH, INFO; pierce points and labels on INFO) and .svg (or DIR/strip.json for an
 instance).
 Parts that cannot be nested (open or self-intersecting contours, larger than every sheet,
-unreadable files) are listed as left out; the others still nest. Same seed, same layout
+unreadable files) are left out, each named on one `warning:` line on stderr and in
+nest.json's left_out; the others still nest (exit code 0). Same seed, same layout
 for the same budget.";
 
 /// `spinvalence nest`.
@@ -104,7 +105,7 @@ pub struct NestArgs {
     #[arg(value_name = "PARTS", required = true)]
     pub parts: Vec<PathBuf>,
     /// Sheet size WIDTHxHEIGHT in mm; several comma-separated sizes are stock sizes in order.
-    #[arg(long, default_value = "3000x1500")]
+    #[arg(long, default_value = "3000x1500", allow_hyphen_values = true)]
     pub sheet: String,
     /// Clear border along the sheet edges (mm).
     #[arg(long, value_name = "MM", default_value_t = sv_nest::sheets::DEFAULT_MARGIN, allow_negative_numbers = true)]

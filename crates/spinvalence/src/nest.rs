@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use anyhow::{anyhow, bail, Result};
 use sv_export::SheetPart;
 use sv_nest::sheets::LeftOut;
-use sv_nest::{NestOptions, Part, RotationMode, StockSheet, StripInstance, StripOptions};
+use sv_nest::{NestOptions, RotationMode, StockSheet, StripInstance, StripOptions};
 
 use crate::cli::NestArgs;
 use crate::output::{self, number, AtomicDir, AtomicFiles};
@@ -72,7 +72,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
         return run_strip(args, json[0]);
     }
     let sheets = parse_sheets(&args.sheet)?;
-    let mut parts: Vec<Part> = Vec::new();
+    let mut parts: Vec<SheetPart> = Vec::new();
     let mut left_out: Vec<LeftOut> = Vec::new();
     let mut stems: Vec<String> = Vec::new();
     for path in &args.parts {
@@ -97,7 +97,13 @@ pub fn run(args: &NestArgs) -> Result<()> {
         stems.push(stem.clone());
         match sv_nest::dxf::parse_parts(&text, &stem) {
             Ok(read) => {
-                parts.extend(read.parts);
+                // the parts with what they etch (labels and fold marks of a strip DXF)
+                parts.extend(
+                    read.parts
+                        .into_iter()
+                        .zip(read.etch)
+                        .map(|(part, etch)| SheetPart { part, etch }),
+                );
                 left_out.extend(read.rejected.into_iter().map(|e| LeftOut {
                     part: name.clone(),
                     reason: e.to_string(),
@@ -136,10 +142,13 @@ pub fn run(args: &NestArgs) -> Result<()> {
         ..NestOptions::default()
     };
     let started = Instant::now();
-    let parts: Vec<SheetPart> = parts.into_iter().map(SheetPart::plain).collect();
     let mut stage = crate::sheets::run(&parts, &options, args.thickness, args.quiet)?;
     stage.report.left_out.extend(left_out);
     let report = &stage.report;
+    // one line per part left out, even with --quiet: the others were nested without it
+    for l in &report.left_out {
+        eprintln!("warning: {} left out: {}", l.part, l.reason);
+    }
     for (name, text) in &stage.drawings {
         sheet_dir.write(name, text)?;
     }

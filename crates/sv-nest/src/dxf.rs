@@ -5,8 +5,9 @@
 //! contour of a part, odd depth = hole of its parent.
 //!
 //! Layers: the plasma-shop layers `ETCH` (etched marks) and `INFO` (never cut: nominal
-//! tiles, titles, sheet outline, pierce points) are ignored, so the strip and sheet
-//! drawings of spinvalence read back as their cut contours. In a file with an `OUTSIDE`
+//! tiles, titles, sheet outline, pierce points) are not contours, so the strip and sheet
+//! drawings of spinvalence read back as their cut contours; `INFO` is ignored, `ETCH`
+//! strokes (LWPOLYLINE, LINE) are kept per part to be etched on the sheet. In a file with an `OUTSIDE`
 //! layer, its closed contours are the part outlines and every other cut contour (`INSIDE`)
 //! is a hole of the smallest outline containing it (one outside every outline is rejected
 //! by name); a file without one (layer `0` and the like) is nested by containment alone.
@@ -26,6 +27,9 @@ pub struct DxfParts {
     pub parts: Vec<Part>,
     /// contours that were rejected, each naming its part/contour
     pub rejected: Vec<NestError>,
+    /// per part (parallel to `parts`), what it etches: the `ETCH` polylines and lines whose
+    /// first point lies on it, in the part's frame (not cut, not nested; drawn on the sheet)
+    pub etch: Vec<Vec<Vec<[f64; 2]>>>,
 }
 
 /// Reads a DXF file; part ids are the file stem (with `#k` when the file holds several parts).
@@ -104,7 +108,7 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
             .find(|p| p.0 == 8)
             .map_or(String::new(), |p| p.1.to_ascii_uppercase())
     };
-    let not_cut = |layer: &str| layer == "ETCH" || layer == "INFO";
+    let not_cut = |layer: &str| layer == "INFO";
     let num = |v: &str, line: usize| -> Result<f64, NestError> {
         v.parse::<f64>()
             .ok()
@@ -112,6 +116,7 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
             .ok_or_else(|| err(line, &format!("bad number {v:?}")))
     };
     let mut contours: Vec<Read> = Vec::new();
+    let mut etch: Vec<Vec<[f64; 2]>> = Vec::new();
     let mut segs: Vec<Seg> = Vec::new();
     let mut rejected = Vec::new();
     let mut e = 0;
@@ -134,6 +139,38 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
         let get = |c: i32| ent.iter().find(|p| p.0 == c);
         let getf =
             |c: i32, d: f64| -> Result<f64, NestError> { get(c).map_or(Ok(d), |p| num(p.1, p.2)) };
+        if layer == "ETCH" {
+            // straight etched strokes (spinvalence's labels and fold marks) are kept
+            match kind {
+                "LWPOLYLINE" => {
+                    let mut pts: Vec<[f64; 2]> = Vec::new();
+                    for p in &ent[1..] {
+                        match p.0 {
+                            10 => pts.push([num(p.1, p.2)?, 0.0]),
+                            20 => {
+                                if let Some(v) = pts.last_mut() {
+                                    v[1] = num(p.1, p.2)?;
+                                }
+                            }
+                            _ => {}
+                        }
+                    }
+                    if getf(70, 0.0)? as i64 & 1 == 1 && !pts.is_empty() {
+                        pts.push(pts[0]);
+                    }
+                    if pts.len() > 1 {
+                        etch.push(pts);
+                    }
+                }
+                "LINE" => etch.push(vec![
+                    [getf(10, 0.0)?, getf(20, 0.0)?],
+                    [getf(11, 0.0)?, getf(21, 0.0)?],
+                ]),
+                _ => {}
+            }
+            e += 1;
+            continue;
+        }
         match kind {
             "LWPOLYLINE" => {
                 let flags = getf(70, 0.0)? as i64;
@@ -227,7 +264,29 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
     } else {
         group(contours.into_iter().map(|c| c.contour).collect(), name)
     };
-    Ok(DxfParts { parts, rejected })
+    let etch = etch_of(&parts, etch);
+    Ok(DxfParts {
+        parts,
+        rejected,
+        etch,
+    })
+}
+
+/// Each etched polyline goes with the smallest part whose outline holds its first point;
+/// one on no part is dropped.
+fn etch_of(parts: &[Part], lines: Vec<Vec<[f64; 2]>>) -> Vec<Vec<Vec<[f64; 2]>>> {
+    let flat: Vec<Vec<[f64; 2]>> = parts.iter().map(|p| p.outer.flatten(0.01)).collect();
+    let area: Vec<f64> = flat.iter().map(|f| polygon_area(f).abs()).collect();
+    let mut out = vec![Vec::new(); parts.len()];
+    for l in lines {
+        let home = (0..parts.len())
+            .filter(|&k| point_in_polygon(l[0], &flat[k]))
+            .min_by(|&a, &b| area[a].total_cmp(&area[b]));
+        if let Some(k) = home {
+            out[k].push(l);
+        }
+    }
+    out
 }
 
 fn push_polyline(

@@ -391,6 +391,11 @@ fn dxf_shop_layers_outlines_holes_and_what_is_not_cut() {
             ("sheet#3".to_string(), 1)
         ]
     );
+    // the etched square goes with part 1 (closed: five points), nothing else etches
+    assert_eq!(read.etch.len(), 3);
+    assert_eq!(read.etch[0].len(), 1);
+    assert_eq!(read.etch[0][0].len(), 5);
+    assert!(read.etch[1].is_empty() && read.etch[2].is_empty());
     assert_eq!(read.rejected.len(), 1, "{:?}", read.rejected);
     let why = read.rejected[0].to_string();
     assert!(why.contains("sheet") && why.contains("OUTSIDE"), "{why}");
