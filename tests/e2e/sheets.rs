@@ -133,9 +133,10 @@ fn parts_of(name: &str, entities: &[DxfEntity]) -> Vec<SheetPart> {
 /// labelled once on the sheets, nothing left out, file names with `_tTHICKmm`, R2000 in
 /// mm without splines, the sheet outline on INFO, every part inside the margin, parts at
 /// least the spacing apart (arcs flattened to [`CHORD`]), inside contours before their
-/// outline, one pierce point per contour in scrap, the offcut clear, and ezdxf's audit
-/// clean. Returns `nest.json` and the outline area of all parts (mm^2).
-fn check_sheets(dir: &Dir, out: &str, ids: &[&str], thickness: &str) -> (Value, f64) {
+/// outline, one pierce point per contour in scrap and more than the `kerf` from every cut
+/// contour, the offcut clear, and ezdxf's audit clean. Returns `nest.json` and the outline
+/// area of all parts (mm^2).
+fn check_sheets(dir: &Dir, out: &str, ids: &[&str], thickness: &str, kerf: f64) -> (Value, f64) {
     let out_dir = dir.join(out);
     let nest = read_json(&out_dir.join("nest.json"));
     let spec = &nest["sheet"];
@@ -240,6 +241,15 @@ fn check_sheets(dir: &Dir, out: &str, ids: &[&str], thickness: &str) -> (Value, 
                 !parts.iter().any(|q| q.material(p)),
                 "{stem}: pierce point {p:?} on a part"
             );
+            let clear = parts
+                .iter()
+                .flat_map(|q| std::iter::once(&q.outline).chain(&q.holes))
+                .map(|c| distance(&[p], c))
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                clear > kerf,
+                "{stem}: pierce point {p:?} only {clear} mm from a cut (kerf {kerf})"
+            );
         }
         let polygon_area = |p: &[[f64; 2]]| {
             (0..p.len())
@@ -292,16 +302,14 @@ fn build_sheets_hold_every_strip_once_inside_the_margin_and_apart() {
     out.expect_code(0);
     let strips = read_json(&dir.join("out/strips.json"));
     let ids = strip_ids(&strips);
-    let (nest, outline_area) = check_sheets(dir, "out", &ids, "3");
+    let kerf = num(&strips["params"]["kerf"], "kerf");
+    let (nest, outline_area) = check_sheets(dir, "out", &ids, "3", kerf);
     let spec = &nest["sheet"];
     let (margin, spacing) = (
         num(&spec["margin"], "margin"),
         num(&spec["spacing"], "spacing"),
     );
-    assert!(
-        spacing >= num(&strips["params"]["kerf"], "kerf"),
-        "spacing {spacing} below the kerf"
-    );
+    assert!(spacing >= kerf, "spacing {spacing} below the kerf");
     // the reported lower bound is at least the plain area bound recomputed from the DXFs,
     // and no layout beats it
     let sheets = nest["sheets"].as_array().unwrap().len() as u64;
@@ -371,7 +379,8 @@ fn nest_reads_the_strip_dxfs_by_their_cut_layers() {
     assert!(run.stderr.is_empty(), "{run:?}");
     // the same acceptance as the build's sheets, the part ids being the file stems
     // (one part per strip DXF: INFO tiles and ETCH text are not parts)
-    check_sheets(&dir, "n", &strip_ids(&strips), "3");
+    let kerf = num(&strips["params"]["kerf"], "kerf");
+    check_sheets(&dir, "n", &strip_ids(&strips), "3", kerf);
     // every slot came along as a hole
     let cuts: usize = list
         .iter()
