@@ -331,3 +331,62 @@ fn bad_build_input_is_one_line_and_writes_nothing() {
         assert!(dir.entries("o").is_empty(), "partial output for {args:?}");
     }
 }
+
+/// `[nest]` in the config file: stock sizes, margin, clearance, seed, time box; the
+/// `--nest-seconds` flag overrides the file, and bad values stop the build by key.
+#[test]
+fn nest_section_sets_the_sheets_and_bad_values_name_the_key() {
+    let dir = Dir::new();
+    dir.write(
+        "n.toml",
+        "target = \"builtin:vault\"\n[secondary]\nunit_size = 500.0\n[nest]\nsheets = [\"2000x1000\", \"3200x1600\"]\nmargin = 15.0\nclearance = 2.0\nseconds = 600.0\nseed = 7\n",
+    );
+    let started = std::time::Instant::now();
+    dir.run(&[
+        "build",
+        "--config",
+        "n.toml",
+        "--nest-seconds",
+        "1",
+        "--out",
+        "o",
+        "--quiet",
+    ])
+    .expect_code(0);
+    // the flag, not the file's ten minutes
+    assert!(started.elapsed().as_secs() < 120);
+    let nest = read_json(&dir.join("o/nest.json"));
+    let spec = &nest["sheet"];
+    assert_eq!(num(&spec["width"], "width"), 2000.0);
+    assert_eq!(num(&spec["margin"], "margin"), 15.0);
+    // spacing = profile kerf (1.3) + clearance
+    assert!(
+        (num(&spec["spacing"], "spacing") - 3.3).abs() < 1e-9,
+        "{spec}"
+    );
+    let timings = read_json(&dir.join("o/timings.json"));
+    assert!(num(&timings["nest"], "nest") < 60.0);
+    let files = dir.entries("o/sheets");
+    for (i, sheet) in nest["sheets"].as_array().unwrap().iter().enumerate() {
+        let (w, h) = (num(&sheet["width"], "w"), num(&sheet["height"], "h"));
+        assert!([(2000.0, 1000.0), (3200.0, 1600.0)].contains(&(w, h)));
+        let stem = format!("sheet-{:02}_{w}x{h}mm_t3mm", i + 1);
+        assert!(files.contains(&format!("{stem}.dxf")), "{stem}: {files:?}");
+    }
+    for (toml, key) in [
+        ("[nest]\nsheets = [\"0x1500\"]\n", "nest.sheets"),
+        ("[nest]\nsheets = [\"-5x10\"]\n", "nest.sheets"),
+        ("[nest]\nsheets = []\n", "nest.sheets"),
+        ("[nest]\nmargin = -1.0\n", "nest.margin"),
+        ("[nest]\nseconds = 0.0\n", "nest.seconds"),
+    ] {
+        dir.write("bad.toml", toml);
+        let out = dir.run(&["build", "--config", "bad.toml", "--out", "bad"]);
+        out.expect_code(2);
+        assert!(out.one_error_line().contains(key), "{key}:{out:?}");
+        assert!(!dir.join("bad").exists(), "{key}: nothing written");
+    }
+    let out = dir.run(&["build", "--nest-seconds", "-1", "--out", "bad"]);
+    out.expect_code(2);
+    assert!(out.one_error_line().contains("seconds"), "{out:?}");
+}
