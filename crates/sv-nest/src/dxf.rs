@@ -139,22 +139,33 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
         let get = |c: i32| ent.iter().find(|p| p.0 == c);
         let getf =
             |c: i32, d: f64| -> Result<f64, NestError> { get(c).map_or(Ok(d), |p| num(p.1, p.2)) };
+        // the vertices of an LWPOLYLINE (10/20 pairs, 42 bulges)
+        let lw_vertices = || -> Result<Vec<Vertex>, NestError> {
+            let mut vs: Vec<Vertex> = Vec::new();
+            for p in &ent[1..] {
+                match p.0 {
+                    10 => vs.push(Vertex::line(num(p.1, p.2)?, 0.0)),
+                    20 => {
+                        if let Some(v) = vs.last_mut() {
+                            v.y = num(p.1, p.2)?;
+                        }
+                    }
+                    42 => {
+                        if let Some(v) = vs.last_mut() {
+                            v.bulge = num(p.1, p.2)?;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            Ok(vs)
+        };
         if layer == "ETCH" {
             // straight etched strokes (spinvalence's labels and fold marks) are kept
             match kind {
                 "LWPOLYLINE" => {
-                    let mut pts: Vec<[f64; 2]> = Vec::new();
-                    for p in &ent[1..] {
-                        match p.0 {
-                            10 => pts.push([num(p.1, p.2)?, 0.0]),
-                            20 => {
-                                if let Some(v) = pts.last_mut() {
-                                    v[1] = num(p.1, p.2)?;
-                                }
-                            }
-                            _ => {}
-                        }
-                    }
+                    let mut pts: Vec<[f64; 2]> =
+                        lw_vertices()?.iter().map(|v| [v.x, v.y]).collect();
                     if getf(70, 0.0)? as i64 & 1 == 1 && !pts.is_empty() {
                         pts.push(pts[0]);
                     }
@@ -174,23 +185,7 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
         match kind {
             "LWPOLYLINE" => {
                 let flags = getf(70, 0.0)? as i64;
-                let mut vs: Vec<Vertex> = Vec::new();
-                for p in &ent[1..] {
-                    match p.0 {
-                        10 => vs.push(Vertex::line(num(p.1, p.2)?, 0.0)),
-                        20 => {
-                            if let Some(v) = vs.last_mut() {
-                                v.y = num(p.1, p.2)?;
-                            }
-                        }
-                        42 => {
-                            if let Some(v) = vs.last_mut() {
-                                v.bulge = num(p.1, p.2)?;
-                            }
-                        }
-                        _ => {}
-                    }
-                }
+                let vs = lw_vertices()?;
                 let at = (ent[0].2, outside);
                 push_polyline(vs, flags & 1 == 1, at, name, &mut contours, &mut rejected);
             }
@@ -275,14 +270,10 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
 /// Each etched polyline goes with the smallest part whose outline holds its first point;
 /// one on no part is dropped.
 fn etch_of(parts: &[Part], lines: Vec<Vec<[f64; 2]>>) -> Vec<Vec<Vec<[f64; 2]>>> {
-    let flat: Vec<Vec<[f64; 2]>> = parts.iter().map(|p| p.outer.flatten(0.01)).collect();
-    let area: Vec<f64> = flat.iter().map(|f| polygon_area(f).abs()).collect();
+    let (flat, area) = flat_areas(parts.iter().map(|p| &p.outer));
     let mut out = vec![Vec::new(); parts.len()];
     for l in lines {
-        let home = (0..parts.len())
-            .filter(|&k| point_in_polygon(l[0], &flat[k]))
-            .min_by(|&a, &b| area[a].total_cmp(&area[b]));
-        if let Some(k) = home {
+        if let Some(k) = smallest_holding(&flat, &area, l[0]) {
             out[k].push(l);
         }
     }
@@ -381,13 +372,25 @@ fn part_id(name: &str, k: usize, count: usize) -> String {
     }
 }
 
+/// The smallest of the closed polygons `flat` (areas `area`) that holds `p`.
+fn smallest_holding(flat: &[Vec<[f64; 2]>], area: &[f64], p: [f64; 2]) -> Option<usize> {
+    (0..flat.len())
+        .filter(|&k| point_in_polygon(p, &flat[k]))
+        .min_by(|&a, &b| area[a].total_cmp(&area[b]))
+}
+
+/// Flattened outlines of `contours` and their areas.
+fn flat_areas<'a>(contours: impl Iterator<Item = &'a Contour>) -> (Vec<Vec<[f64; 2]>>, Vec<f64>) {
+    let flat: Vec<Vec<[f64; 2]>> = contours.map(|c| c.flatten(0.01)).collect();
+    let area = flat.iter().map(|f| polygon_area(f).abs()).collect();
+    (flat, area)
+}
+
 /// Parts of a file with shop layers: each `OUTSIDE` contour is an outline (in file order),
 /// every other contour a hole of the smallest outline containing its first point.
 fn by_layer(contours: Vec<Read>, name: &str, rejected: &mut Vec<NestError>) -> Vec<Part> {
-    let tol = 0.01;
     let (outer, inner): (Vec<Read>, Vec<Read>) = contours.into_iter().partition(|c| c.outside);
-    let flat: Vec<Vec<[f64; 2]>> = outer.iter().map(|c| c.contour.flatten(tol)).collect();
-    let area: Vec<f64> = flat.iter().map(|f| polygon_area(f).abs()).collect();
+    let (flat, area) = flat_areas(outer.iter().map(|c| &c.contour));
     let count = outer.len();
     let mut parts: Vec<Part> = outer
         .into_iter()
@@ -400,10 +403,7 @@ fn by_layer(contours: Vec<Read>, name: &str, rejected: &mut Vec<NestError>) -> V
         .collect();
     for h in inner {
         let probe = h.contour.vertices[0];
-        let home = (0..parts.len())
-            .filter(|&k| point_in_polygon([probe.x, probe.y], &flat[k]))
-            .min_by(|&a, &b| area[a].total_cmp(&area[b]));
-        match home {
+        match smallest_holding(&flat, &area, [probe.x, probe.y]) {
             Some(k) => parts[k].holes.push(h.contour),
             None => rejected.push(NestError::BadPart {
                 part: format!(
@@ -418,9 +418,7 @@ fn by_layer(contours: Vec<Read>, name: &str, rejected: &mut Vec<NestError>) -> V
 }
 
 fn group(contours: Vec<Contour>, name: &str) -> Vec<Part> {
-    let tol = 0.01;
-    let flat: Vec<Vec<[f64; 2]>> = contours.iter().map(|c| c.flatten(tol)).collect();
-    let area: Vec<f64> = flat.iter().map(|f| polygon_area(f).abs()).collect();
+    let (flat, area) = flat_areas(contours.iter());
     let mut idx: Vec<usize> = (0..contours.len()).collect();
     idx.sort_by(|&a, &b| area[b].total_cmp(&area[a]));
     // parent = smallest larger contour containing the first vertex
