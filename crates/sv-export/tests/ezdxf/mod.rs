@@ -10,9 +10,12 @@ fn crates_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// The venv's python with ezdxf installed.
+/// The venv's python with ezdxf installed. Tests run in parallel threads and several test
+/// binaries share the venv, so creation is serialised by an exclusive lock on
+/// `target/ezdxf-venv.lock`; `make test` also prepares it before the tests start.
 pub fn venv_python() -> PathBuf {
-    let venv = crates_dir().join("../target/ezdxf-venv");
+    let target = crates_dir().join("../target");
+    let venv = target.join("ezdxf-venv");
     let python = venv.join("bin/python3");
     let has_ezdxf = |p: &Path| {
         Command::new(p)
@@ -21,22 +24,33 @@ pub fn venv_python() -> PathBuf {
             .map(|s| s.success())
             .unwrap_or(false)
     };
+    if has_ezdxf(&python) {
+        return python;
+    }
+    std::fs::create_dir_all(&target).expect("create target/");
+    let lock = std::fs::File::create(target.join("ezdxf-venv.lock")).expect("venv lock file");
+    lock.lock().expect("lock the ezdxf venv");
+    // another test may have finished the venv while this one waited for the lock
     if !has_ezdxf(&python) {
         let ok = Command::new("python3")
-            .args(["-m", "venv"])
+            .args(["-m", "venv", "--clear"])
             .arg(&venv)
             .status()
             .expect("python3 is needed to audit DXF files with ezdxf")
             .success();
         assert!(ok, "could not create {}", venv.display());
-        let ok = Command::new(venv.join("bin/pip"))
-            .args(["install", "-q", "ezdxf"])
+        let ok = Command::new(&python)
+            .args(["-m", "pip", "install", "-q", "ezdxf"])
             .status()
             .expect("pip")
             .success();
         assert!(ok, "could not install ezdxf into {}", venv.display());
     }
-    assert!(has_ezdxf(&python));
+    assert!(
+        has_ezdxf(&python),
+        "ezdxf is not importable from {}",
+        python.display()
+    );
     python
 }
 
