@@ -142,6 +142,8 @@ pub struct StripsConfig {
     pub direction: sv_strips::StripDirection,
     /// Longest flat pattern (mm): the sheet length minus both margins.
     pub max_length: f64,
+    /// `fill` (pieces as long as the sheet allows) or `balanced` (nearly equal pieces).
+    pub split: sv_strips::SplitRule,
 }
 
 impl Default for StripsConfig {
@@ -150,6 +152,7 @@ impl Default for StripsConfig {
         Self {
             direction: d.direction,
             max_length: d.max_length,
+            split: d.split,
         }
     }
 }
@@ -160,6 +163,7 @@ impl StripsConfig {
         let options = StripOptions {
             direction: self.direction,
             max_length: self.max_length,
+            split: self.split,
             ..StripOptions::default()
         };
         options.validate().map_err(|e| anyhow!("strips: {e}"))?;
@@ -362,6 +366,17 @@ mod tests {
         assert_eq!(c.profile.thickness, 2.0);
         assert_eq!(c.profile.kerf, ProfileParams::default().kerf);
         assert_eq!(c.strips.direction, sv_strips::StripDirection::V);
+        assert_eq!(c.strips.split, sv_strips::SplitRule::Fill);
+        let c = parse("[strips]\nsplit = \"balanced\"\n", "c.toml").unwrap();
+        assert_eq!(
+            c.strips.to_options().unwrap().split,
+            sv_strips::SplitRule::Balanced
+        );
+        let e = parse("[strips]\nsplit = \"even\"\n", "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("c.toml:2:") && e.contains("fill"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
         assert!(parse("[strips]\nmax_length = -1.0\n", "c.toml")
             .unwrap()
             .strips

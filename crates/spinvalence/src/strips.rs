@@ -81,13 +81,7 @@ pub fn run(
         .fold((0.0f64, 0.0f64), |(b, t), p| {
             (b.max(p.bend.abs()), t.max(p.twist.abs()))
         });
-    let file = StripsFile::new(
-        &strips,
-        &profiles,
-        params,
-        frame.params.expansion,
-        options.max_length,
-    );
+    let file = StripsFile::new(&strips, &profiles, params, frame.params.expansion, options);
     Ok(StripsStage {
         file,
         strips,

@@ -29,7 +29,7 @@
 //!         profile_strip(s, &names, &params).unwrap()
 //!     })
 //!     .collect();
-//! let file = StripsFile::new(&strips, &profiles, &params, 1.0, 2980.0);
+//! let file = StripsFile::new(&strips, &profiles, &params, 1.0, &StripOptions::default());
 //! let input = sv_report::ReportInput {
 //!     target: "grid 3 x 2", generator: "doc test", frame: &frame, strips: &file,
 //!     nest: None, hub_mesh: None,

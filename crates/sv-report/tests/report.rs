@@ -23,7 +23,7 @@ fn build() -> (FrameFile, StripsFile) {
             profile_strip(s, &names, &params).unwrap()
         })
         .collect();
-    let file = StripsFile::new(&strips, &profiles, &params, 1.0, 2980.0);
+    let file = StripsFile::new(&strips, &profiles, &params, 1.0, &StripOptions::default());
     (frame, file)
 }
 

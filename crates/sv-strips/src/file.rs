@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Contour, FlatStrip, Label, ProfileParams, StripProfile};
+use crate::{Contour, FlatStrip, Label, ProfileParams, SplitRule, StripOptions, StripProfile};
 
 /// The `format` tag of a strips file.
 pub const STRIPS_FORMAT: &str = "spin-valence/strips";
@@ -34,6 +34,9 @@ pub struct StripsParams {
     pub expansion: f64,
     /// Longest allowed flat pattern (mm).
     pub max_length: f64,
+    /// Extra: how chains longer than `max_length` were cut (`fill` or `balanced`).
+    #[serde(default)]
+    pub split: SplitRule,
 }
 
 /// One strip.
@@ -96,7 +99,7 @@ impl StripsFile {
         profiles: &[StripProfile],
         params: &ProfileParams,
         expansion: f64,
-        max_length: f64,
+        options: &StripOptions,
     ) -> Self {
         let records = strips
             .iter()
@@ -142,7 +145,8 @@ impl StripsFile {
                 profile: params.clone(),
                 min_web: params.min_web(),
                 expansion,
-                max_length,
+                max_length: options.max_length,
+                split: options.split,
             },
             strips: records,
         }

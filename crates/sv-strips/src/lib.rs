@@ -43,8 +43,8 @@ pub use drc::{check_profile, DrcRule, Violation, DRC_ARC_TOLERANCE};
 pub use error::StripsError;
 pub use file::{FlatTile, PinRecord, StripRecord, StripsFile, StripsParams, STRIPS_FORMAT};
 pub use params::{
-    ProfileParams, StripDirection, StripOptions, DEFAULT_SHEET_LENGTH, DEFAULT_SHEET_MARGIN,
-    MIN_INSIDE_RADIUS,
+    ProfileParams, SplitRule, StripDirection, StripOptions, DEFAULT_SHEET_LENGTH,
+    DEFAULT_SHEET_MARGIN, MIN_INSIDE_RADIUS,
 };
 pub use plane::convex_intersection_area;
 pub use profile::{profile_strip, Contour, Label, StripProfile};

@@ -26,6 +26,22 @@ pub enum StripDirection {
     V,
 }
 
+/// How a chain too long for one sheet is cut into pieces (the piece count is the same
+/// either way: the fewest the sheet length and the overlap guard allow).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SplitRule {
+    /// Pieces as long as the sheet allows, in chain order, the remainder last (a 20-unit
+    /// row of the pavilion: 9 + 9 + 2). Full-length pieces fill a sheet row each and the
+    /// short remainders share rows: 8 sheets for the pavilion against 10 balanced. A one-unit
+    /// remainder is avoided by taking one unit less per piece when that needs no more pieces.
+    #[default]
+    Fill,
+    /// Pieces of nearly equal length (20 units: 7 + 7 + 6): one piece per sheet row, each
+    /// row partly empty.
+    Balanced,
+}
+
 /// Options of the strip partition and unrolling.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StripOptions {
@@ -34,6 +50,9 @@ pub struct StripOptions {
     /// Longest flat pattern (mm): the sheet length minus both margins. A strip whose flat
     /// pattern (longer side of its minimum-area bounding rectangle) would exceed it is split.
     pub max_length: f64,
+    /// How a chain longer than `max_length` is cut into pieces.
+    #[serde(default)]
+    pub split: SplitRule,
     /// Two flat tiles count as overlapping when their intersection exceeds this area
     /// (mm^2). Consecutive tiles touch along their joint line (area 0); 1e-3 mm^2 is far below
     /// anything a cutter resolves and far above rounding noise.
@@ -45,6 +64,7 @@ impl Default for StripOptions {
         Self {
             direction: StripDirection::U,
             max_length: DEFAULT_SHEET_LENGTH - 2.0 * DEFAULT_SHEET_MARGIN,
+            split: SplitRule::Fill,
             overlap_area_tolerance: 1e-3,
         }
     }

@@ -4,7 +4,7 @@ use sv_frame::FrameFile;
 use sv_geom::{segment_closest, Point2, Point3, Vector2, Vector3};
 
 use crate::plane::{convex_intersection_area, min_area_rect};
-use crate::{StripDirection, StripOptions, StripsError, TileSet};
+use crate::{SplitRule, StripDirection, StripOptions, StripsError, TileSet};
 
 /// The joint between two consecutive units of a strip (a pinned connection, paper fig. 12).
 #[derive(Clone, Debug, PartialEq)]
@@ -338,21 +338,7 @@ pub fn unroll_tiles(
     options.validate()?;
     let mut pieces: Vec<Piece> = Vec::new();
     for chain in chains(tiles, options.direction) {
-        // Greedy first; when that leaves a short last piece, split the chain again into
-        // as many pieces of at most ceil(n / k) units each, which balances them (no
-        // one-unit stub at the end of a long strip) when it needs no more pieces.
-        let greedy = split_chain(tiles, &chain, options, usize::MAX)?;
-        let k = greedy.len();
-        let shortest = greedy.iter().map(|p| p.units.len()).min().unwrap_or(0);
-        let cap = chain.len().div_ceil(k);
-        if k > 1 && shortest < cap {
-            let balanced = split_chain(tiles, &chain, options, cap)?;
-            if balanced.len() == k {
-                pieces.extend(balanced);
-                continue;
-            }
-        }
-        pieces.extend(greedy);
+        pieces.extend(split_by_rule(tiles, &chain, options)?);
     }
     pieces
         .into_iter()
@@ -362,6 +348,33 @@ pub fn unroll_tiles(
             Ok(normalise(id, p))
         })
         .collect()
+}
+
+/// Split one chain by `options.split`. Both rules start from the greedy split, which needs
+/// the fewest pieces `k`, and only re-split with a cap on the units per piece when that
+/// still takes `k` pieces.
+fn split_by_rule(
+    tiles: &TileSet,
+    chain: &[usize],
+    options: &StripOptions,
+) -> Result<Vec<Piece>, StripsError> {
+    let greedy = split_chain(tiles, chain, options, usize::MAX)?;
+    let k = greedy.len();
+    let sizes: Vec<usize> = greedy.iter().map(|p| p.units.len()).collect();
+    let shortest = sizes.iter().copied().min().unwrap_or(0);
+    let longest = sizes.iter().copied().max().unwrap_or(0);
+    let cap = match options.split {
+        // a one-unit stub (a part of its own and a joint welded on site for one unit): one
+        // unit less per piece moves units into it
+        SplitRule::Fill if k > 1 && shortest == 1 => longest - 1,
+        // at most ceil(n / k) units per piece
+        SplitRule::Balanced if k > 1 && shortest < chain.len().div_ceil(k) => {
+            chain.len().div_ceil(k)
+        }
+        _ => return Ok(greedy),
+    };
+    let again = split_chain(tiles, chain, options, cap)?;
+    Ok(if again.len() == k { again } else { greedy })
 }
 
 /// Split one chain into pieces, greedily: a piece ends where the next tile would overlap

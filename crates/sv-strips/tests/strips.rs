@@ -4,8 +4,8 @@
 use sv_frame::{solve, FrameFile, QuadMesh, SolveOptions};
 use sv_geom::{Point2, Point3};
 use sv_strips::{
-    check_profile, convex_intersection_area, profile_strip, unit_labels, unroll, ProfileParams,
-    StripDirection, StripOptions, StripsError, StripsFile, TileSet,
+    check_profile, convex_intersection_area, profile_strip, unit_labels, unroll, FlatStrip,
+    ProfileParams, SplitRule, StripDirection, StripOptions, StripsError, StripsFile, TileSet,
 };
 
 fn frame(mesh: &QuadMesh) -> FrameFile {
@@ -163,21 +163,11 @@ fn strips_follow_the_grid_rows_and_columns() {
     assert_eq!(v[0].units, vec![0, 6, 12, 18, 24, 30]);
 }
 
-#[test]
-fn long_strips_are_split_at_the_sheet_length() {
-    let f = cap();
-    let options = StripOptions {
-        max_length: 1000.0,
-        ..Default::default()
-    };
-    check_unrolled(&f, &options);
-    let strips = unroll(&f, &options).unwrap();
-    assert!(strips.len() > 6);
-    assert!(strips.iter().all(|s| s.size[0] <= 1000.0));
-    // pieces of one chain are balanced, not a long run and a one-unit stub
-    let chains = sv_strips::chains(&TileSet::from_frame(&f).unwrap(), options.direction);
+/// Unit counts of the pieces of each chain, checking that the pieces follow the chains.
+fn piece_sizes(chains: &[Vec<usize>], strips: &[FlatStrip]) -> Vec<Vec<usize>> {
     let mut next = 0;
-    for chain in &chains {
+    let mut out = Vec::new();
+    for chain in chains {
         let mut covered = 0;
         let mut sizes = Vec::new();
         while covered < chain.len() {
@@ -187,14 +177,57 @@ fn long_strips_are_split_at_the_sheet_length() {
             sizes.push(s.units.len());
             next += 1;
         }
-        let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
-        assert!(
-            hi - lo <= 1,
-            "unbalanced pieces {sizes:?} of a {}-unit chain",
-            chain.len()
-        );
+        assert_eq!(covered, chain.len());
+        out.push(sizes);
     }
     assert_eq!(next, strips.len());
+    out
+}
+
+#[test]
+fn long_strips_are_split_at_the_sheet_length() {
+    let f = cap();
+    let tiles = TileSet::from_frame(&f).unwrap();
+    let mut counts = Vec::new();
+    for split in [SplitRule::Fill, SplitRule::Balanced] {
+        let options = StripOptions {
+            max_length: 1300.0,
+            split,
+            ..Default::default()
+        };
+        check_unrolled(&f, &options);
+        let strips = unroll(&f, &options).unwrap();
+        assert!(strips.len() > 6);
+        assert!(strips.iter().all(|s| s.size[0] <= 1300.0));
+        let chains = sv_strips::chains(&tiles, options.direction);
+        let sizes = piece_sizes(&chains, &strips);
+        for (chain, sizes) in chains.iter().zip(&sizes) {
+            let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+            if sizes.len() > 1 {
+                assert!(*lo > 1, "a one-unit stub in {sizes:?} ({split:?})");
+            }
+            // balanced: nearly equal pieces, not a long run and a short rest
+            if split == SplitRule::Balanced {
+                assert!(
+                    hi - lo <= 1,
+                    "unbalanced pieces {sizes:?} of a {}-unit chain",
+                    chain.len()
+                );
+            }
+        }
+        counts.push(sizes);
+    }
+    // both rules need the same number of pieces per chain (the same welds on site); fill
+    // puts at least as many units into the first piece of a chain, and more somewhere
+    let (fill, balanced) = (&counts[0], &counts[1]);
+    for (f, b) in fill.iter().zip(balanced) {
+        assert_eq!(f.len(), b.len(), "fill {f:?}, balanced {b:?}");
+        assert!(f[0] >= b[0], "fill {f:?}, balanced {b:?}");
+    }
+    assert!(
+        fill.iter().zip(balanced).any(|(f, b)| f[0] > b[0]),
+        "fill {fill:?}, balanced {balanced:?}"
+    );
     // a tile longer than the sheet cannot be cut
     let e = unroll(
         &f,
@@ -242,27 +275,25 @@ fn a_strip_that_would_overlap_itself_is_split() {
             })
             .collect(),
     };
-    let options = StripOptions {
-        max_length: 1e6,
-        ..Default::default()
-    };
-    let strips = sv_strips::unroll_tiles(&tiles, &options).unwrap();
-    assert_eq!(
-        strips.len(),
-        2,
-        "{:?}",
-        strips.iter().map(|s| s.units.len()).collect::<Vec<_>>()
-    );
     // one full turn (16 tiles) fits and the 17th would overlap, so the 24 tiles need two
-    // pieces; balanced, they are 12 + 12 rather than 16 + 8
-    assert_eq!(
-        strips.iter().map(|s| s.units.len()).collect::<Vec<_>>(),
-        [12, 12]
-    );
-    for s in &strips {
-        for i in 0..s.tiles.len() {
-            for j in (i + 1)..s.tiles.len() {
-                assert!(convex_intersection_area(&s.tiles[i], &s.tiles[j]) <= 1e-3);
+    // pieces: 16 + 8 filled, 12 + 12 balanced
+    for (split, expected) in [(SplitRule::Fill, [16, 8]), (SplitRule::Balanced, [12, 12])] {
+        let options = StripOptions {
+            max_length: 1e6,
+            split,
+            ..Default::default()
+        };
+        let strips = sv_strips::unroll_tiles(&tiles, &options).unwrap();
+        assert_eq!(
+            strips.iter().map(|s| s.units.len()).collect::<Vec<_>>(),
+            expected,
+            "{split:?}"
+        );
+        for s in &strips {
+            for i in 0..s.tiles.len() {
+                for j in (i + 1)..s.tiles.len() {
+                    assert!(convex_intersection_area(&s.tiles[i], &s.tiles[j]) <= 1e-3);
+                }
             }
         }
     }
@@ -297,13 +328,7 @@ fn profiles_pass_the_design_rules() {
             );
             profiles.push(p);
         }
-        let file = StripsFile::new(
-            &strips,
-            &profiles,
-            &params,
-            f.params.expansion,
-            options.max_length,
-        );
+        let file = StripsFile::new(&strips, &profiles, &params, f.params.expansion, &options);
         let json = serde_json::to_value(&file).unwrap();
         assert_eq!(json["format"], "spin-valence/strips");
         assert_eq!(json["version"], 1);
