@@ -274,21 +274,34 @@ fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
-/// Whether closed segments `ab` and `cd` touch or cross.
+/// Distance from a line (mm) within which a point counts as on it in [`segments_intersect`]:
+/// far below anything a cutter resolves, far above the rounding of the side test.
+const ON_LINE: f64 = 1e-6;
+
+/// Whether closed segments `ab` and `cd` touch or cross. Side tests within [`ON_LINE`] of
+/// zero count as on the line, so two nearly collinear edges apart on one line (rounding
+/// noise in their side tests) do not read as crossing.
 pub fn segments_intersect(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
-    let (d1, d2) = (orient(a, b, c), orient(a, b, d));
-    let (d3, d4) = (orient(c, d, a), orient(c, d, b));
-    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
-        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
-    {
+    let side = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
+        let o = orient(p, q, r);
+        let len = (q[0] - p[0]).hypot(q[1] - p[1]);
+        if o.abs() <= ON_LINE * len {
+            0.0
+        } else {
+            o.signum()
+        }
+    };
+    let (d1, d2) = (side(a, b, c), side(a, b, d));
+    let (d3, d4) = (side(c, d, a), side(c, d, b));
+    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
         return true;
     }
     let on = |p: [f64; 2], q: [f64; 2], r: [f64; 2], o: f64| {
         o == 0.0
-            && r[0] >= p[0].min(q[0])
-            && r[0] <= p[0].max(q[0])
-            && r[1] >= p[1].min(q[1])
-            && r[1] <= p[1].max(q[1])
+            && r[0] >= p[0].min(q[0]) - ON_LINE
+            && r[0] <= p[0].max(q[0]) + ON_LINE
+            && r[1] >= p[1].min(q[1]) - ON_LINE
+            && r[1] <= p[1].max(q[1]) + ON_LINE
     };
     on(a, b, c, d1) || on(a, b, d, d2) || on(c, d, a, d3) || on(c, d, b, d4)
 }

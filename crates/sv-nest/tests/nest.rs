@@ -283,6 +283,58 @@ fn bad_parts_are_reported_and_skipped() {
 }
 
 #[test]
+fn collinear_edges_apart_are_not_a_self_intersection() {
+    // A U-shaped part: the tops of its two prongs lie on one line, 40 mm apart. Turned to
+    // 720 angles and moved far from the origin (inexact coordinates), it stays a valid
+    // outline and the prong tops never cross.
+    let u = [
+        [0.0, 0.0],
+        [100.0, 0.0],
+        [100.0, 50.0],
+        [70.0, 50.0],
+        [70.0, 20.0],
+        [30.0, 20.0],
+        [30.0, 50.0],
+        [0.0, 50.0],
+    ];
+    for k in 0..720 {
+        let (s, c) = (k as f64 * 0.5 + 0.123).to_radians().sin_cos();
+        let pts: Vec<[f64; 2]> = u
+            .iter()
+            .map(|p| {
+                [
+                    2345.678 + c * p[0] - s * p[1],
+                    1234.567 + s * p[0] + c * p[1],
+                ]
+            })
+            .collect();
+        let part = Part::new("u", Contour::polygon(&pts));
+        assert!(
+            part.validated_outline(0.01).is_ok(),
+            "turned by {} deg: {:?}",
+            k as f64 * 0.5 + 0.123,
+            part.validated_outline(0.01)
+        );
+        // the two prong tops, and a real crossing of them with a diagonal
+        assert!(!segments_intersect(pts[2], pts[3], pts[6], pts[7]));
+        assert!(segments_intersect(pts[2], pts[3], pts[0], pts[3]));
+    }
+    // two straight slot runs of a pavilion unit, 14.5 mm apart on one line: their side
+    // tests have opposite signs in both directions, which an exact-sign test reads as a
+    // crossing
+    let (a, b) = (
+        [392.3843959010201, 29.074226677924667],
+        [382.5390969686966, 27.322059633789113],
+    );
+    let (c, d) = (
+        [656.520533939849, 76.08251351799211],
+        [406.6600793528891, 31.614868891921194],
+    );
+    assert!(!segments_intersect(a, b, c, d));
+    assert!(!segments_intersect(c, d, a, b));
+}
+
+#[test]
 fn lower_bounds_count_big_parts() {
     // three parts each above half a bin: MT says 3, area says 2
     let lb = sv_nest::lower_bounds(&[0.6, 0.6, 0.6], 1.0);
