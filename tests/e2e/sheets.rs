@@ -3,15 +3,16 @@
 //! exactly one sheet, inside the margin, no two parts closer than the spacing, each part's
 //! inside contours before its outline, a pierce point in scrap per contour; and
 //! `spinvalence nest` reading the build's strip DXFs by their cut layers. The files are
-//! parsed and the arcs flattened here; only the point-in-polygon and point-to-segment
-//! primitives come from sv-nest (unit-tested there).
+//! parsed and the arcs flattened here; only the point-in-polygon (sv-nest) and segment
+//! distance (`sv_geom::planar`) primitives come from the library, unit-tested there.
 
 use std::collections::HashMap;
 use std::fs;
 use std::path::Path;
 
 use serde_json::Value;
-use sv_nest::part::{point_in_polygon, segment_distance};
+use sv_geom::planar::segment_distance;
+use sv_nest::part::point_in_polygon;
 
 use crate::build::default_build;
 use crate::ezdxf::audit;
@@ -51,20 +52,10 @@ fn flatten(v: &[[f64; 3]]) -> Vec<[f64; 2]> {
 fn distance(p: &[[f64; 2]], q: &[[f64; 2]]) -> f64 {
     let mut best = f64::INFINITY;
     for i in 0..p.len() {
-        let (a, b) = (p[i], p[(i + 1) % p.len()]);
         for j in 0..q.len() {
+            let (a, b) = (p[i], p[(i + 1) % p.len()]);
             let (c, d) = (q[j], q[(j + 1) % q.len()]);
-            let cross = |o: [f64; 2], u: [f64; 2], v: [f64; 2]| {
-                (u[0] - o[0]) * (v[1] - o[1]) - (u[1] - o[1]) * (v[0] - o[0])
-            };
-            if cross(a, b, c) * cross(a, b, d) < 0.0 && cross(c, d, a) * cross(c, d, b) < 0.0 {
-                return 0.0;
-            }
-            best = best
-                .min(segment_distance(a, c, d))
-                .min(segment_distance(b, c, d))
-                .min(segment_distance(c, a, b))
-                .min(segment_distance(d, a, b));
+            best = best.min(segment_distance(a, b, c, d));
         }
     }
     best

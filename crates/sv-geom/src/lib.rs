@@ -1,5 +1,6 @@
 //! Geometry core of Spin-Valence: the nalgebra aliases every other crate uses, named
-//! tolerances, and a few small 3D queries (closest points of two segments, planarity).
+//! tolerances, a few small 3D queries (closest points of two segments, planarity) and 2D
+//! segment queries for flat patterns ([`planar`]).
 //!
 //! Conventions: lengths in millimetres, right-handed, Z up, angles in radians.
 //!
@@ -13,6 +14,7 @@
 //! assert!((c.s - 0.5).abs() < 1e-12 && (c.t - 0.5).abs() < 1e-12);
 //! ```
 
+pub mod planar;
 mod segment;
 
 pub use segment::{segment_closest, SegmentClosest};

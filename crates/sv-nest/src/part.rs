@@ -251,16 +251,10 @@ pub fn point_in_polygon(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
 }
 
 /// Distance from `p` to the segment `ab`.
-pub fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
-}
+pub use sv_geom::planar::point_segment_distance as segment_distance;
+/// Whether closed segments `ab` and `cd` touch or cross (nearly collinear edges apart on one
+/// line do not).
+pub use sv_geom::planar::segments_intersect;
 
 /// Distance from `p` to the boundary of the closed polygon `poly`.
 pub fn boundary_distance(p: [f64; 2], poly: &[[f64; 2]]) -> f64 {
@@ -268,42 +262,6 @@ pub fn boundary_distance(p: [f64; 2], poly: &[[f64; 2]]) -> f64 {
     (0..n)
         .map(|i| segment_distance(p, poly[i], poly[(i + 1) % n]))
         .fold(f64::INFINITY, f64::min)
-}
-
-fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
-    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-}
-
-/// Distance from a line (mm) within which a point counts as on it in [`segments_intersect`]:
-/// far below anything a cutter resolves, far above the rounding of the side test.
-const ON_LINE: f64 = 1e-6;
-
-/// Whether closed segments `ab` and `cd` touch or cross. Side tests within [`ON_LINE`] of
-/// zero count as on the line, so two nearly collinear edges apart on one line (rounding
-/// noise in their side tests) do not read as crossing.
-pub fn segments_intersect(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
-    let side = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
-        let o = orient(p, q, r);
-        let len = (q[0] - p[0]).hypot(q[1] - p[1]);
-        if o.abs() <= ON_LINE * len {
-            0.0
-        } else {
-            o.signum()
-        }
-    };
-    let (d1, d2) = (side(a, b, c), side(a, b, d));
-    let (d3, d4) = (side(c, d, a), side(c, d, b));
-    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
-        return true;
-    }
-    let on = |p: [f64; 2], q: [f64; 2], r: [f64; 2], o: f64| {
-        o == 0.0
-            && r[0] >= p[0].min(q[0]) - ON_LINE
-            && r[0] <= p[0].max(q[0]) + ON_LINE
-            && r[1] >= p[1].min(q[1]) - ON_LINE
-            && r[1] <= p[1].max(q[1]) + ON_LINE
-    };
-    on(a, b, c, d1) || on(a, b, d, d2) || on(c, d, a, d3) || on(c, d, b, d4)
 }
 
 /// First pair of non-adjacent edges of the closed polygon that touch, if any.

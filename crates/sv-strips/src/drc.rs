@@ -2,6 +2,7 @@
 
 use cavalier_contours::polyline::{PlineContainsResult, PlineSource, Polyline};
 use serde::{Deserialize, Serialize};
+use sv_geom::planar::segment_distance;
 
 use crate::params::MIN_INSIDE_RADIUS;
 use crate::{Contour, FlatStrip, ProfileParams, StripProfile};
@@ -87,48 +88,6 @@ pub(crate) fn flatten(c: &Contour, tol: f64) -> Vec<[f64; 2]> {
     out
 }
 
-/// Distance from a line (mm) below which a point counts as on it in the crossing test.
-const COLLINEAR_TOLERANCE: f64 = 1e-7;
-
-fn seg_point(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    ((p[0] - a[0] - t * dx).powi(2) + (p[1] - a[1] - t * dy).powi(2)).sqrt()
-}
-
-fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
-    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-}
-
-fn seg_seg(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
-    let ends = seg_point(a, c, d)
-        .min(seg_point(b, c, d))
-        .min(seg_point(c, a, b))
-        .min(seg_point(d, a, b));
-    // A proper crossing puts the ends of each segment strictly on both sides of the other's
-    // line. Side tests within rounding of zero (nearly collinear segments, e.g. a straight
-    // run of one slot continuing the line of the next slot) are not a crossing: their
-    // distance is the end distance above, which is exact for them.
-    let side = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
-        let len = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
-        let o = orient(p, q, r);
-        if len > 0.0 && o.abs() > COLLINEAR_TOLERANCE * len {
-            o.signum()
-        } else {
-            0.0
-        }
-    };
-    if side(a, b, c) * side(a, b, d) < 0.0 && side(c, d, a) * side(c, d, b) < 0.0 {
-        return 0.0;
-    }
-    ends
-}
-
 fn bounds(p: &[[f64; 2]]) -> [f64; 4] {
     p.iter()
         .fold([f64::MAX, f64::MAX, f64::MIN, f64::MIN], |b, q| {
@@ -165,7 +124,7 @@ fn distance(a: &[[f64; 2]], b: &[[f64; 2]], reach: f64) -> (f64, [f64; 2]) {
             continue;
         }
         for &(r, s) in &b_near {
-            let d = seg_seg(p, q, r, s);
+            let d = segment_distance(p, q, r, s);
             if d < best.0 {
                 best = (d, p);
             }
@@ -308,38 +267,4 @@ pub fn check_profile(
         }
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn collinear_segments_apart_are_measured_not_crossed() {
-        // Two straight slot runs of one pavilion unit (strip A26 with sheet-filling pieces):
-        // the short run lies on the line of the long one, 14.3 mm beyond its end. The side
-        // tests of collinear segments are rounding noise; they once read as a crossing (web 0).
-        let (a, b) = (
-            [392.3843959010201, 29.074226677924667],
-            [382.5390969686966, 27.322059633789113],
-        );
-        let (c, d) = (
-            [656.520533939849, 76.08251351799211],
-            [406.6600793528891, 31.614868891921194],
-        );
-        let d_ab = seg_seg(a, b, c, d);
-        assert!((d_ab - 14.5).abs() < 0.1, "{d_ab}");
-        assert_eq!(seg_seg(a, b, c, d), seg_seg(c, d, a, b));
-        // a real crossing is still 0, and parallel segments are their offset apart
-        assert_eq!(
-            seg_seg([0.0, 0.0], [10.0, 10.0], [0.0, 10.0], [10.0, 0.0]),
-            0.0
-        );
-        assert!((seg_seg([0.0, 0.0], [10.0, 0.0], [2.0, 3.0], [8.0, 3.0]) - 3.0).abs() < 1e-12);
-        // collinear and overlapping: touching material, web 0
-        assert_eq!(
-            seg_seg([0.0, 0.0], [10.0, 0.0], [5.0, 0.0], [15.0, 0.0]),
-            0.0
-        );
-    }
 }
