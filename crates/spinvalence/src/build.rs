@@ -45,8 +45,19 @@ pub struct Timings {
     pub total: f64,
 }
 
-/// The config after the command line has overridden the file.
-pub fn resolve(args: &BuildArgs) -> Result<BuildConfig> {
+/// The options of each stage, derived from the config and checked.
+pub struct StageOptions {
+    /// The primary solve.
+    pub solve: sv_frame::SolveOptions,
+    /// Strips and unrolling.
+    pub strips: sv_strips::StripOptions,
+    /// Nesting onto sheets.
+    pub nest: sv_nest::NestOptions,
+}
+
+/// The config after the command line has overridden the file, and the stage options it
+/// gives, every value checked before any work starts.
+pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
     let mut cfg = match &args.config {
         Some(path) => {
             let text = output::read_text(path)?;
@@ -80,13 +91,20 @@ pub fn resolve(args: &BuildArgs) -> Result<BuildConfig> {
         bail!("invalid unit size {size}: must be a positive length in mm");
     }
     cfg.secondary.check().map_err(|e| anyhow!("{e}"))?;
-    cfg.primary.to_solve_options()?;
-    cfg.strips.to_options()?;
+    let solve = cfg.primary.to_solve_options()?;
+    let strips = cfg.strips.to_options()?;
     cfg.profile
         .validate()
         .map_err(|e| anyhow!("profile: {e}"))?;
-    cfg.nest.to_options(cfg.profile.kerf)?;
-    Ok(cfg)
+    let nest = cfg.nest.to_options(cfg.profile.kerf)?;
+    Ok((
+        cfg,
+        StageOptions {
+            solve,
+            strips,
+            nest,
+        },
+    ))
 }
 
 /// Load `builtin:NAME` or an OBJ/STL triangle mesh.
@@ -106,11 +124,8 @@ pub fn load_target(spec: &str) -> Result<TargetMesh> {
 /// Run `build`. Nothing is written unless every stage succeeded.
 pub fn run(args: &BuildArgs) -> Result<()> {
     let started = Instant::now();
-    let cfg = resolve(args)?;
-    let solve_options = cfg.primary.to_solve_options()?;
+    let (cfg, options) = resolve(args)?;
     let target = load_target(&cfg.target)?;
-    let strip_options = cfg.strips.to_options()?;
-    let nest_options = cfg.nest.to_options(cfg.profile.kerf)?;
     let files = AtomicFiles::create(&cfg.out, &FILES)?;
     let strips_dir = AtomicDir::create(&cfg.out, "strips")?;
     let sheets_dir = AtomicDir::create(&cfg.out, "sheets")?;
@@ -126,8 +141,8 @@ pub fn run(args: &BuildArgs) -> Result<()> {
     let secondary_s = t0.elapsed().as_secs_f64();
 
     let t1 = Instant::now();
-    let bar = progress_bar(args.quiet, solve_options.max_iterations, "primary");
-    let solved = sv_frame::solve(&mesh, &solve_options, &mut |p: Progress| {
+    let bar = progress_bar(args.quiet, options.solve.max_iterations, "primary");
+    let solved = sv_frame::solve(&mesh, &options.solve, &mut |p: Progress| {
         bar.set_position(p.iteration as u64);
         bar.set_message(format!("gap sum {} mm", number(p.gap_sum)));
     });
@@ -137,7 +152,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
 
     let t2 = Instant::now();
     let mut frame = solved.to_frame_file(&mesh);
-    let stage = strips::run(&mut frame, &strip_options, &cfg.profile)
+    let stage = strips::run(&mut frame, &options.strips, &cfg.profile)
         .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
     let strips_json = sv_io::inline_number_arrays(&serde_json::to_string_pretty(&stage.file)?);
     for (name, text) in &stage.drawings {
@@ -154,7 +169,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         .collect();
     let nested = sheets::run(
         &parts,
-        &nest_options,
+        &options.nest,
         Some(cfg.profile.thickness),
         args.quiet,
     )?;
@@ -211,32 +226,22 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         let max = overlaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let unit = report.mean_edge;
         let mut rows = summary_rows(&cfg, &report, unit, &solved.report, (min, max), &timings);
-        let sheet_rows = rows.len() - 2;
-        rows.insert(
-            sheet_rows,
-            vec![
-                "strips".into(),
-                format!(
-                    "{} (longest {}, worst pin bend {:.1} deg, twist {:.1} deg)",
-                    stage.strips.len(),
-                    number(stage.strips.iter().map(|s| s.size[0]).fold(0.0, f64::max)) + " mm",
-                    stage.worst_pin.0.to_degrees(),
-                    stage.worst_pin.1.to_degrees()
-                ),
-            ],
-        );
-        let at = rows.len() - 2;
-        for (k, row) in sheets::summary_rows(&nested.report).into_iter().enumerate() {
-            rows.insert(at + k, row);
-        }
+        // the stage rows go before the last two (timings and total)
+        let mut stage_rows = vec![vec![
+            "strips".into(),
+            format!(
+                "{} (longest {}, worst pin bend {:.1} deg, twist {:.1} deg)",
+                stage.strips.len(),
+                number(stage.strips.iter().map(|s| s.size[0]).fold(0.0, f64::max)) + " mm",
+                stage.worst_pin.0.to_degrees(),
+                stage.worst_pin.1.to_degrees()
+            ),
+        ]];
+        stage_rows.extend(sheets::summary_rows(&nested.report));
         let report_path = cfg.out.join("report.html").display().to_string();
+        stage_rows.extend(report::summary_rows(&report_stage, &report_path));
         let at = rows.len() - 2;
-        for (k, row) in report::summary_rows(&report_stage, &report_path)
-            .into_iter()
-            .enumerate()
-        {
-            rows.insert(at + k, row);
-        }
+        rows.splice(at..at, stage_rows);
         rows.push(vec![
             "wrote".into(),
             written

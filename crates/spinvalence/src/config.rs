@@ -122,11 +122,7 @@ impl NestConfig {
             sheets,
             margin: self.margin,
             spacing: kerf + self.clearance,
-            rotations: if self.free_rotation {
-                sv_nest::RotationMode::Continuous
-            } else {
-                sv_nest::RotationMode::default()
-            },
+            rotations: sv_nest::RotationMode::free_or_default(self.free_rotation),
             seed: self.seed,
             time_limit: std::time::Duration::from_secs_f64(self.seconds),
             ..sv_nest::NestOptions::default()

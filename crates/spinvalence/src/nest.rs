@@ -132,11 +132,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
         sheets,
         margin: args.margin,
         spacing: args.kerf + args.clearance,
-        rotations: if args.free_rotation {
-            RotationMode::Continuous
-        } else {
-            RotationMode::default()
-        },
+        rotations: RotationMode::free_or_default(args.free_rotation),
         seed: args.seed,
         time_limit: Duration::from_secs_f64(args.nest_seconds),
         ..NestOptions::default()

@@ -54,6 +54,15 @@ impl Default for RotationMode {
 }
 
 impl RotationMode {
+    /// `Continuous` when `free`, else the default 0 and 180 degrees.
+    pub fn free_or_default(free: bool) -> Self {
+        if free {
+            Self::Continuous
+        } else {
+            Self::default()
+        }
+    }
+
     fn range(&self) -> Result<RotationRange, NestError> {
         let angles: Vec<f64> = match self {
             Self::Continuous => return Ok(RotationRange::Continuous),
