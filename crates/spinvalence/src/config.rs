@@ -363,6 +363,11 @@ mod tests {
         assert_eq!(c.profile.kerf, ProfileParams::default().kerf);
         assert_eq!(c.strips.direction, sv_strips::StripDirection::V);
         assert_eq!(c.strips.split, sv_strips::SplitRule::Fill);
+        // the benchmark config of docs/benchmarks.md parses and its profile is valid
+        let b = parse(include_str!("../../../bench/b110.toml"), "bench/b110.toml").unwrap();
+        assert_eq!(b.target, "builtin:saddle");
+        assert_eq!(b.secondary.unit_size, 110.0);
+        b.profile.validate().unwrap();
         let c = parse("[strips]\nsplit = \"balanced\"\n", "c.toml").unwrap();
         assert_eq!(
             c.strips.to_options().unwrap().split,
