@@ -56,6 +56,16 @@ impl Budget {
     pub fn elapsed(&self) -> Duration {
         self.start.elapsed()
     }
+    /// Share of the budget used, 0..1 (wall time or evaluations, whichever is further).
+    pub fn fraction(&self) -> f32 {
+        let t = self.start.elapsed().as_secs_f32() / self.limit.as_secs_f32().max(1e-9);
+        let e = if self.max_evals == u64::MAX {
+            0.0
+        } else {
+            self.evals as f32 / self.max_evals.max(1) as f32
+        };
+        t.max(e).min(1.0)
+    }
 }
 
 /// A rectangular container (no offset applied).
@@ -162,6 +172,25 @@ fn sample_in(item: &Item, rot: f32, area: Rect, rng: &mut Rng64) -> Option<DTran
     Some(DTransformation::new(rot, (tx, ty)))
 }
 
+/// A transformation with rotation `rot` whose rotated bbox centre is uniform in `focus`,
+/// clamped so the bbox lies in `area`.
+fn sample_around(
+    item: &Item,
+    rot: f32,
+    focus: Rect,
+    area: Rect,
+    rng: &mut Rng64,
+) -> Option<DTransformation> {
+    let rb = rotated_bbox(item.shape_cd(), rot);
+    let cx = rng.random_range(focus.x_min..=focus.x_max.max(focus.x_min));
+    let cy = rng.random_range(focus.y_min..=focus.y_max.max(focus.y_min));
+    let t = (
+        cx - 0.5 * (rb.x_min + rb.x_max),
+        cy - 0.5 * (rb.y_min + rb.y_max),
+    );
+    Some(clamp_in(item, rot, t, area))
+}
+
 /// Clamps a transformation so the rotated bbox stays inside `area` where possible.
 fn clamp_in(item: &Item, rot: f32, t: (f32, f32), area: Rect) -> DTransformation {
     let rb = rotated_bbox(item.shape_cd(), rot);
@@ -175,28 +204,182 @@ fn clamp_in(item: &Item, rot: f32, t: (f32, f32), area: Rect) -> DTransformation
     )
 }
 
-/// Overlap proxy of two shapes: summed pole penetration plus a small constant.
-fn pair_overlap(a: &SPolygon, b: &SPolygon) -> f32 {
-    let (pa, pb) = (&a.surrogate().poles, &b.surrogate().poles);
-    let mut s = 0.0;
-    for p in pa {
-        for q in pb {
-            let dx = p.center.0 - q.center.0;
-            let dy = p.center.1 - q.center.1;
-            let o = p.radius + q.radius - (dx * dx + dy * dy).sqrt();
-            if o > 0.0 {
-                s += o.min(2.0 * p.radius.min(q.radius));
-            }
-        }
-    }
-    s + 0.01 * a.diameter().min(b.diameter())
+/// `dt` with its rotation replaced by the nearest rotation the item allows.
+fn closest_allowed(item: &Item, dt: DTransformation) -> DTransformation {
+    let r = match item.allowed_orientations().rotations() {
+        RotationRange::None => 0.0,
+        RotationRange::Discrete(a) => a
+            .iter()
+            .copied()
+            .min_by(|x, y| {
+                let d = |r: f32| jagua_rs::geometry::normalize_rotation(dt.rotation() - r).abs();
+                d(*x).total_cmp(&d(*y))
+            })
+            .unwrap_or(0.0),
+        RotationRange::Continuous => dt.rotation(),
+    };
+    DTransformation::new(r, dt.translation())
 }
 
+/// Overlap of two shapes as in sparrow (Gardeyn & Wauters): a pole-based proxy of the overlap
+/// area, where pole pairs that just touch or miss still count a little (penetration depth
+/// decayed below `eps` = 1 % of the larger diameter), square-rooted and scaled by the geometric
+/// mean of the shapes' sizes, so a collision between two big items weighs more than between two
+/// small ones and the proxy never drops to zero while they collide.
+fn pair_overlap(a: &SPolygon, b: &SPolygon) -> f32 {
+    let eps = a.diameter().max(b.diameter()) * 0.01;
+    let mut s = 0.0;
+    for p in &a.surrogate().poles {
+        for q in &b.surrogate().poles {
+            let dx = p.center.0 - q.center.0;
+            let dy = p.center.1 - q.center.1;
+            let pd = p.radius + q.radius - (dx * dx + dy * dy).sqrt();
+            let pd = if pd >= eps {
+                pd
+            } else {
+                eps * eps / (2.0 * eps - pd)
+            };
+            s += pd * p.radius.min(q.radius);
+        }
+    }
+    let proxy = std::f32::consts::PI * s + eps * eps;
+    proxy.sqrt() * size_penalty(a, b)
+}
+
+/// Geometric mean of the square roots of the convex hull areas.
+fn size_penalty(a: &SPolygon, b: &SPolygon) -> f32 {
+    (a.surrogate().convex_hull_area.sqrt() * b.surrogate().convex_hull_area.sqrt()).sqrt()
+}
+
+/// Overlap of a shape with the outside of the container: the bbox area outside it (or, when
+/// entirely outside, its area plus the distance to the container).
 fn ext_overlap(s: &SPolygon, b: Rect) -> f32 {
     let sb = s.bbox();
-    let dx = (b.x_min - sb.x_min).max(0.0) + (sb.x_max - b.x_max).max(0.0);
-    let dy = (b.y_min - sb.y_min).max(0.0) + (sb.y_max - b.y_max).max(0.0);
-    2.0 * (dx + dy) + 0.01 * s.diameter()
+    let area = |r: &Rect| (r.x_max - r.x_min).max(0.0) * (r.y_max - r.y_min).max(0.0);
+    let ix = Rect {
+        x_min: sb.x_min.max(b.x_min),
+        y_min: sb.y_min.max(b.y_min),
+        x_max: sb.x_max.min(b.x_max),
+        y_max: sb.y_max.min(b.y_max),
+    };
+    let o = if ix.x_max > ix.x_min && ix.y_max > ix.y_min {
+        area(&sb) - area(&ix) + 1e-4 * area(&sb)
+    } else {
+        let (cx, cy) = (0.5 * (sb.x_min + sb.x_max), 0.5 * (sb.y_min + sb.y_max));
+        let (bx, by) = (0.5 * (b.x_min + b.x_max), 0.5 * (b.y_min + b.y_max));
+        area(&sb) + ((cx - bx).powi(2) + (cy - by).powi(2)).sqrt()
+    };
+    2.0 * o.max(0.0).sqrt() * s.surrogate().convex_hull_area.sqrt()
+}
+
+/// Up to `cap` best distinct samples of one move (closer than `unique` in translation and with
+/// the same rotation counts as the same sample; the better one is kept).
+struct BestSamples {
+    cap: usize,
+    unique: f32,
+    v: Vec<(f32, DTransformation)>,
+}
+
+impl BestSamples {
+    fn new(cap: usize, unique: f32) -> Self {
+        Self {
+            cap,
+            unique,
+            v: Vec::with_capacity(cap + 1),
+        }
+    }
+    fn upper(&self) -> f32 {
+        if self.v.len() < self.cap {
+            f32::MAX
+        } else {
+            self.v.last().map_or(f32::MAX, |s| s.0)
+        }
+    }
+    fn report(&mut self, dt: DTransformation, e: f32) {
+        if e >= self.upper() {
+            return;
+        }
+        let (tx, ty) = dt.translation();
+        if let Some(k) = self.v.iter().position(|(_, o)| {
+            let (ox, oy) = o.translation();
+            o.rotation() == dt.rotation() && (ox - tx).hypot(oy - ty) < self.unique
+        }) {
+            if e >= self.v[k].0 {
+                return;
+            }
+            self.v.remove(k);
+        }
+        let at = self.v.partition_point(|s| s.0 <= e);
+        self.v.insert(at, (e, dt));
+        self.v.truncate(self.cap);
+    }
+}
+
+/// Step schedule of one coordinate descent (sparrow: steps grow x1.1 on success, halve on
+/// failure, and the axis is redrawn after every failure).
+#[derive(Clone, Copy)]
+struct Descent {
+    t0: f32,
+    t_min: f32,
+    r0: f32,
+    r_min: f32,
+    wiggle: bool,
+}
+
+/// Coordinate descent from `start` on the translation (and rotation when `wiggle`), with
+/// candidates evaluated by `eval(dt, upper)`. Never returns a worse sample than `start`.
+fn descend(
+    start: (f32, DTransformation),
+    cfg: Descent,
+    eval: &mut dyn FnMut(DTransformation, f32) -> f32,
+    rng: &mut Rng64,
+) -> (f32, DTransformation) {
+    let (mut e, mut pos) = start;
+    let (mut sx, mut sy, mut sr) = (cfg.t0, cfg.t0, cfg.r0);
+    let n_axes = if cfg.wiggle { 6 } else { 4 };
+    let mut axis = rng.random_range(0..n_axes);
+    for _ in 0..400 {
+        if sx < cfg.t_min && sy < cfg.t_min && (!cfg.wiggle || sr < cfg.r_min) {
+            break;
+        }
+        let (tx, ty) = pos.translation();
+        let r = pos.rotation();
+        let c = match axis {
+            0 => [(tx + sx, ty, r), (tx - sx, ty, r)],
+            1 => [(tx, ty + sy, r), (tx, ty - sy, r)],
+            2 => [(tx + sx, ty + sy, r), (tx - sx, ty - sy, r)],
+            3 => [(tx - sx, ty + sy, r), (tx + sx, ty - sy, r)],
+            _ => [(tx, ty, r + sr), (tx, ty, r - sr)],
+        }
+        .map(|(x, y, r)| DTransformation::new(r, (x, y)));
+        let e0 = eval(c[0], e);
+        let e1 = eval(c[1], e);
+        let (ce, cd) = if e0 <= e1 { (e0, c[0]) } else { (e1, c[1]) };
+        let better = ce < e;
+        if ce <= e {
+            (e, pos) = (ce, cd);
+        }
+        let m: f32 = if better { 1.1 } else { 0.5 };
+        match axis {
+            0 => sx *= m,
+            1 => sy *= m,
+            2 | 3 => {
+                sx *= m.sqrt();
+                sy *= m.sqrt();
+            }
+            _ => sr *= m,
+        }
+        if !better {
+            axis = rng.random_range(0..n_axes);
+        }
+    }
+    (e, pos)
+}
+
+/// Outcome of [`Bin::separate`]: collision-free, or the least total overlap reached.
+pub(crate) struct Separation {
+    pub feasible: bool,
+    pub loss: f32,
 }
 
 /// Guided-local-search weights per pair (index `n` = container exterior).
@@ -459,7 +642,9 @@ impl Bin {
         out
     }
 
-    /// Moves member `i` to the position of least weighted overlap found by sampling.
+    /// Moves member `i` to the position of least weighted overlap found by sampling (sparrow's
+    /// search): 25 samples around its current place and 50 anywhere in the container, the 3 best
+    /// distinct ones refined by a coarse coordinate descent, the best of those by a fine one.
     fn move_item(
         &mut self,
         i: usize,
@@ -474,65 +659,69 @@ impl Bin {
         if cur_cost <= 0.0 {
             return;
         }
-        let mut buf: SPolygon = item.shape_cd().as_ref().clone();
-        let mut best = (cur_cost, cur);
-        let mut try_dt = |dt: DTransformation, best: &mut (f32, DTransformation)| {
-            budget.evals += 1;
-            buf.transform_from(item.shape_cd(), &dt.compose());
-            let c = self.eval(i, &buf, Some(gls), best.0, collector);
-            if c < best.0 {
-                *best = (c, dt);
-            }
-        };
-        let diam = item.shape_cd().diameter();
-        let continuous = matches!(
+        let focus = self.placed_shape(i).bbox();
+        let bounds = self.bounds;
+        let ib = item.shape_cd().bbox();
+        let min_dim = (ib.x_max - ib.x_min).min(ib.y_max - ib.y_min).max(1e-6);
+        let wiggle = matches!(
             item.allowed_orientations().rotations(),
             RotationRange::Continuous
         );
-        for _ in 0..48 {
+        let mut buf: SPolygon = item.shape_cd().as_ref().clone();
+        let mut evaluate = |dt: DTransformation, upper: f32| {
+            let dt = clamp_in(&item, dt.rotation(), dt.translation(), bounds);
+            budget.evals += 1;
+            buf.transform_from(item.shape_cd(), &dt.compose());
+            self.eval(i, &buf, Some(gls), upper, collector)
+        };
+        let mut best = BestSamples::new(3, 0.05 * min_dim);
+        best.report(cur, cur_cost);
+        for k in 0..75 {
             let rot = sample_rotation(&item, rng);
-            if let Some(dt) = sample_in(&item, rot, self.bounds, rng) {
-                try_dt(dt, &mut best);
-            }
-        }
-        for k in 0..48 {
-            let s = if k < 24 { 0.25 * diam } else { 0.05 * diam };
-            let (tx, ty) = best.1.translation();
-            let rot = if continuous {
-                best.1.rotation() + rng.random_range(-0.1f32..0.1)
-            } else if rng.random_bool(0.15) {
-                sample_rotation(&item, rng)
+            let dt = if k < 25 {
+                sample_around(&item, rot, focus, bounds, rng)
             } else {
-                best.1.rotation()
+                sample_in(&item, rot, bounds, rng)
             };
-            let t = (tx + rng.random_range(-s..=s), ty + rng.random_range(-s..=s));
-            try_dt(clamp_in(&item, rot, t, self.bounds), &mut best);
-        }
-        let mut step = 0.02 * diam;
-        while step > 0.0005 * diam && best.0 > 0.0 {
-            let (tx, ty) = best.1.translation();
-            let rot = best.1.rotation();
-            let before = best.0;
-            for (dx, dy) in [(step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step)] {
-                try_dt(
-                    clamp_in(&item, rot, (tx + dx, ty + dy), self.bounds),
-                    &mut best,
-                );
-                if best.0 < before {
-                    break;
-                }
-            }
-            if best.0 >= before {
-                step *= 0.5;
+            if let Some(dt) = dt {
+                let e = evaluate(dt, best.upper());
+                best.report(dt, e);
             }
         }
-        if best.1 != cur {
-            self.relocate(i, best.1);
+        let coarse = Descent {
+            t0: 0.25 * min_dim,
+            t_min: 0.02 * min_dim,
+            r0: 5f32.to_radians(),
+            r_min: 1f32.to_radians(),
+            wiggle,
+        };
+        let fine = Descent {
+            t0: 0.01 * min_dim,
+            t_min: 0.001 * min_dim,
+            r0: 0.5f32.to_radians(),
+            r_min: 0.05f32.to_radians(),
+            wiggle,
+        };
+        for s in best.v.clone() {
+            let (e, dt) = descend(s, coarse, &mut evaluate, rng);
+            best.report(dt, e);
+        }
+        let Some(&start) = best.v.first() else {
+            return;
+        };
+        let (e, dt) = descend(start, fine, &mut evaluate, rng);
+        let dt = clamp_in(&item, dt.rotation(), dt.translation(), bounds);
+        if e < cur_cost && dt != cur {
+            self.relocate(i, dt);
         }
     }
 
-    /// Overlap-minimising separation with guided local search. Returns `true` when the
-    /// layout is collision-free; otherwise the least-overlapping state found is kept.
+    /// Overlap-minimising separation with guided local search (sparrow's separator): every
+    /// colliding item is moved to its place of least weighted overlap, the pair weights of the
+    /// remaining collisions grow, until the layout is collision-free or `max_strikes` rounds
+    /// of `max_no_improve` iterations in a row bring no substantial progress. Returns
+    /// `true` when the layout is collision-free; otherwise the least-overlapping state found
+    /// is kept.
     pub fn separate(
         &mut self,
         rng: &mut Rng64,
@@ -540,65 +729,188 @@ impl Bin {
         max_strikes: usize,
         max_no_improve: usize,
     ) -> bool {
+        self.separate_loss(rng, budget, max_strikes, max_no_improve)
+            .feasible
+    }
+
+    /// [`Bin::separate`] that also reports the least total overlap reached.
+    pub fn separate_loss(
+        &mut self,
+        rng: &mut Rng64,
+        budget: &mut Budget,
+        max_strikes: usize,
+        max_no_improve: usize,
+    ) -> Separation {
         let n = self.members.len();
         let mut gls = Gls::new(n);
         let mut collector = BasicHazardCollector::new();
         let mut ov = self.overlaps(&mut collector);
         if ov.is_empty() {
-            return true;
+            return Separation {
+                feasible: true,
+                loss: 0.0,
+            };
         }
-        let mut best_total: f32 = ov.iter().map(|o| o.2).sum();
+        let total = |ov: &[(usize, usize, f32)]| ov.iter().map(|o| o.2).sum::<f32>();
+        let mut min_loss = total(&ov);
         let mut best_snap = self.save();
-        let (mut strikes, mut no_imp) = (0, 0);
-        loop {
-            if budget.done() {
-                self.restore(&best_snap);
-                return false;
-            }
-            let mut colliding: Vec<usize> = ov
-                .iter()
-                .flat_map(|&(i, j, _)| [i, j])
-                .filter(|&k| k < n)
-                .collect();
-            colliding.sort_unstable();
-            colliding.dedup();
-            colliding.shuffle(rng);
-            for &i in &colliding {
-                self.move_item(i, &gls, rng, budget, &mut collector);
-            }
-            ov = self.overlaps(&mut collector);
-            if ov.is_empty() {
-                return true;
-            }
-            let total: f32 = ov.iter().map(|o| o.2).sum();
-            let max_o = ov.iter().map(|o| o.2).fold(0.0, f32::max);
-            let mut hit = vec![false; (n + 1) * (n + 1)];
-            for &(i, j, o) in &ov {
-                let w = gls.get(i, j) * (1.2 + 0.8 * o / max_o);
-                gls.set(i, j, w);
-                hit[i * (n + 1) + j] = true;
-                hit[j * (n + 1) + i] = true;
-            }
-            for (k, w) in gls.w.iter_mut().enumerate() {
-                if !hit[k] {
-                    *w = (*w * 0.95).max(1.0);
+        let mut strikes = 0;
+        while strikes < max_strikes && !budget.done() {
+            let strike_start = total(&ov);
+            let mut no_imp = 0;
+            while no_imp < max_no_improve && !budget.done() {
+                let mut colliding: Vec<usize> = ov
+                    .iter()
+                    .flat_map(|&(i, j, _)| [i, j])
+                    .filter(|&k| k < n)
+                    .collect();
+                colliding.sort_unstable();
+                colliding.dedup();
+                colliding.shuffle(rng);
+                for &i in &colliding {
+                    self.move_item(i, &gls, rng, budget, &mut collector);
                 }
-            }
-            if total < best_total * 0.999 {
-                best_total = total;
-                best_snap = self.save();
-                no_imp = 0;
-            } else {
-                no_imp += 1;
-                if no_imp > max_no_improve {
-                    strikes += 1;
-                    self.restore(&best_snap);
-                    if strikes >= max_strikes {
-                        return false;
+                ov = self.overlaps(&mut collector);
+                if ov.is_empty() {
+                    return Separation {
+                        feasible: true,
+                        loss: 0.0,
+                    };
+                }
+                let loss = total(&ov);
+                if loss < min_loss {
+                    if loss < 0.98 * min_loss {
+                        no_imp = 0;
                     }
-                    ov = self.overlaps(&mut collector);
-                    no_imp = 0;
+                    min_loss = loss;
+                    best_snap = self.save();
+                } else {
+                    no_imp += 1;
                 }
+                let max_o = ov.iter().map(|o| o.2).fold(0.0, f32::max);
+                let mut hit = vec![false; (n + 1) * (n + 1)];
+                for &(i, j, o) in &ov {
+                    // capped so weighted sums stay finite when a pair never separates
+                    let w = (gls.get(i, j) * (1.2 + 0.8 * o / max_o)).min(1e15);
+                    gls.set(i, j, w);
+                    hit[i * (n + 1) + j] = true;
+                    hit[j * (n + 1) + i] = true;
+                }
+                for (k, w) in gls.w.iter_mut().enumerate() {
+                    if !hit[k] {
+                        *w = (*w * 0.95).max(1.0);
+                    }
+                }
+            }
+            if strike_start * 0.98 <= min_loss {
+                strikes += 1;
+            } else {
+                strikes = 0;
+            }
+            self.restore(&best_snap);
+            ov = self.overlaps(&mut collector);
+        }
+        self.restore(&best_snap);
+        Separation {
+            feasible: false,
+            loss: min_loss,
+        }
+    }
+
+    /// Moves the container's right edge to `x_max`: the items whose bbox centre is right of
+    /// `split` move left by the difference, creating overlaps around `split` (sparrow).
+    pub fn shrink_at(&mut self, split: f32, x_max: f32) {
+        let delta = x_max - self.bounds.x_max;
+        for i in 0..self.members.len() {
+            let sb = self.placed_shape(i).bbox();
+            if 0.5 * (sb.x_min + sb.x_max) > split {
+                let dt = self.members[i].dt;
+                let (tx, ty) = dt.translation();
+                self.relocate(i, DTransformation::new(dt.rotation(), (tx + delta, ty)));
+            }
+        }
+        self.set_bounds(Rect {
+            x_max,
+            ..self.bounds
+        });
+    }
+
+    /// Perturbs the layout by swapping two large items (among those holding the largest 75 %
+    /// of the convex hull area; the second one differing in size from the first where
+    /// possible), as sparrow's exploration does after a failed separation. Items lying mostly
+    /// inside a swapped item's old place travel with it.
+    pub fn disrupt(&mut self, rng: &mut Rng64) {
+        let n = self.members.len();
+        if n < 2 {
+            return;
+        }
+        let cha = |m: &Member| m.item.shape_cd().surrogate().convex_hull_area;
+        let mut areas: Vec<f32> = self.members.iter().map(cha).collect();
+        areas.sort_by(|a, b| b.total_cmp(a));
+        let total: f32 = areas.iter().sum();
+        let mut acc = 0.0;
+        let mut cutoff = 0.0;
+        for a in &areas {
+            acc += a;
+            if acc > 0.75 * total {
+                cutoff = *a;
+                break;
+            }
+        }
+        let large: Vec<usize> = (0..n)
+            .filter(|&k| cha(&self.members[k]) >= cutoff)
+            .collect();
+        let a = large[rng.random_range(0..large.len())];
+        let (aa, ad) = (
+            self.members[a].item.area(),
+            self.members[a].item.shape_cd().diameter(),
+        );
+        let differ: Vec<usize> = large
+            .iter()
+            .copied()
+            .filter(|&k| {
+                let it = &self.members[k].item;
+                (it.area() - aa).abs() > 0.01 * aa
+                    && (it.shape_cd().diameter() - ad).abs() > 0.01 * ad
+            })
+            .collect();
+        let b = if differ.is_empty() {
+            let k = rng.random_range(0..n - 1);
+            if k >= a {
+                k + 1
+            } else {
+                k
+            }
+        } else {
+            differ[rng.random_range(0..differ.len())]
+        };
+        let (da, db) = (self.members[a].dt, self.members[b].dt);
+        // items whose pole of inaccessibility lies in a swapped item's old shape follow it
+        let riders = |bin: &Bin, k: usize| -> Vec<usize> {
+            let shape = bin.placed_shape(k);
+            (0..n)
+                .filter(|&j| j != a && j != b)
+                .filter(|&j| {
+                    let c = bin.placed_shape(j).poi().center;
+                    shape.bbox().x_min <= c.0
+                        && c.0 <= shape.bbox().x_max
+                        && shape.bbox().y_min <= c.1
+                        && c.1 <= shape.bbox().y_max
+                        && jagua_rs::geometry::geo_traits::CollidesWith::collides_with(shape, &c)
+                })
+                .collect()
+        };
+        let (ra, rb) = (riders(self, a), riders(self, b));
+        let na = closest_allowed(&self.members[a].item, db);
+        let nb = closest_allowed(&self.members[b].item, da);
+        self.relocate(a, na);
+        self.relocate(b, nb);
+        for (list, old, new) in [(ra, da, na), (rb, db, nb)] {
+            let carry = old.compose().inverse().transform(&new.compose());
+            for j in list {
+                let moved = self.members[j].dt.compose().transform(&carry).decompose();
+                let moved = closest_allowed(&self.members[j].item, moved);
+                self.relocate(j, moved);
             }
         }
     }

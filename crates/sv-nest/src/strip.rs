@@ -8,7 +8,7 @@ use jagua_rs::entities::Item;
 use jagua_rs::io::export::int_to_ext_transformation;
 use jagua_rs::io::import::Importer;
 use jagua_rs::probs::spp::io::ext_repr::ExtSPInstance;
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
 use crate::engine::{rect, Bin, Budget, Rng64, CDE_CONFIG};
@@ -32,7 +32,8 @@ impl StripInstance {
     pub fn from_json(text: &str) -> Result<Self, NestError> {
         let ext: ExtSPInstance =
             serde_json::from_str(text).map_err(|e| NestError::Instance(e.to_string()))?;
-        let importer = Importer::new(CDE_CONFIG, None, None);
+        // conservative simplification for collision checks (shapes only grow), as sparrow does
+        let importer = Importer::new(CDE_CONFIG, Some(0.001), Some((0.01, 0.01)));
         let inst = jagua_rs::probs::spp::io::import_instance(&importer, &ext)
             .map_err(|e| NestError::Instance(format!("{}: {e:#}", ext.name)))?;
         Ok(Self {
@@ -75,6 +76,18 @@ pub struct StripOptions {
     /// independent searches run side by side (seeds derived from `seed`), the best kept;
     /// default: one per core
     pub threads: usize,
+}
+
+/// Share of the budget spent exploring (the rest compresses the best layout).
+const EXPLORE_SHARE: f32 = 0.8;
+/// Relative shrink after each successful separation while exploring.
+const EXPLORE_SHRINK: f32 = 0.002;
+
+/// |N(0, 1)| by the Box-Muller transform.
+fn half_normal(rng: &mut Rng64) -> f32 {
+    let u1: f32 = rng.random_range(f32::EPSILON..1.0);
+    let u2: f32 = rng.random_range(0.0..1.0);
+    ((-2.0 * u1.ln()).sqrt() * (std::f32::consts::TAU * u2).cos()).abs()
 }
 
 /// Default wall-clock budget of [`StripOptions`].
@@ -227,35 +240,53 @@ fn nest_strip_one(
         best: f64::from(best_len),
         density: density_of(best_len),
     });
-    let mut ratio: f32 = 0.01;
-    while !budget.done() {
-        let target = (best_len - inset) * (1.0 - ratio);
-        bin.set_bounds(rect(inset, inset, target, h - inset));
-        for i in 0..bin.members.len() {
-            let sb = bin.placed_shape(i).bbox();
-            if sb.x_max > target {
-                let dt = bin.members[i].dt;
-                let (tx, ty) = dt.translation();
-                let shift = sb.x_max - target;
-                let nt = (tx - shift, ty);
-                bin.relocate(
-                    i,
-                    jagua_rs::geometry::DTransformation::new(dt.rotation(), nt),
-                );
+    let report = |len: f32, budget: &Budget, progress: &mut dyn FnMut(&Progress)| {
+        progress(&Progress {
+            elapsed_s: budget.elapsed().as_secs_f64(),
+            evaluations: budget.evals,
+            best: f64::from(len),
+            density: density_of(len),
+        });
+    };
+    // exploration (sparrow): shrink a little after each success; after a failure, restart
+    // from one of the failed layouts at the same length (the less overlap, the likelier),
+    // disrupted by swapping two large items
+    let mut pool: Vec<(f32, crate::engine::BinSnapshot)> = Vec::new();
+    while !budget.done() && budget.fraction() < EXPLORE_SHARE {
+        let sep = bin.separate_loss(&mut rng, &mut budget, 3, 200);
+        if sep.feasible {
+            let used = fit(&mut bin);
+            let width = used - inset;
+            if used < best_len {
+                best_len = used;
+                best = bin.save();
+                report(best_len, &budget, progress);
             }
+            pool.clear();
+            let next = inset + (width - inset) * (1.0 - EXPLORE_SHRINK);
+            bin.shrink_at(inset + 0.5 * (width - inset), next);
+        } else if !budget.done() {
+            let at = pool.partition_point(|p| p.0 <= sep.loss);
+            pool.insert(at, (sep.loss, bin.save()));
+            let k = ((half_normal(&mut rng) * 0.25).min(0.999) * pool.len() as f32) as usize;
+            bin.restore(&pool[k.min(pool.len() - 1)].1);
+            bin.disrupt(&mut rng);
         }
-        if bin.separate(&mut rng, &mut budget, 3, 40) {
+    }
+    // compression: from the best layout, shrink at a random place by a ratio falling from
+    // 0.05 % to 0.001 % over the rest of the budget
+    let start = budget.fraction();
+    while !budget.done() {
+        let t = ((budget.fraction() - start) / (1.0 - start).max(1e-6)).clamp(0.0, 1.0);
+        let r = 5e-4 + t * (1e-5 - 5e-4);
+        bin.restore(&best);
+        let len = best_len - inset;
+        let split = rng.random_range(inset..len.max(inset + 1e-6));
+        bin.shrink_at(split, inset + (len - inset) * (1.0 - r));
+        if bin.separate_loss(&mut rng, &mut budget, 5, 100).feasible {
             best_len = fit(&mut bin);
             best = bin.save();
-            progress(&Progress {
-                elapsed_s: budget.elapsed().as_secs_f64(),
-                evaluations: budget.evals,
-                best: f64::from(best_len),
-                density: density_of(best_len),
-            });
-        } else {
-            bin.restore(&best);
-            ratio = (ratio * 0.7).max(0.001);
+            report(best_len, &budget, progress);
         }
     }
     bin.restore(&best);
