@@ -1,5 +1,5 @@
 //! Strip-packing benchmark runner:
-//! `cargo run --release -p sv-nest --example spp -- FILE --seconds 60 --seed 0 [--svg OUT]`.
+//! `cargo run --release -p sv-nest --example spp -- FILE --seconds 60 --seed 0 [--evals N]`.
 #![allow(clippy::print_stdout)]
 
 use std::time::Duration;
@@ -9,11 +9,16 @@ fn main() {
     let mut file = None;
     let mut secs = 10.0;
     let mut seed = 0;
+    let mut evals = None;
     let mut i = 0;
     while i < args.len() {
         match args[i].as_str() {
             "--seconds" => {
                 secs = args[i + 1].parse().expect("seconds");
+                i += 1;
+            }
+            "--evals" => {
+                evals = Some(args[i + 1].parse().expect("evals"));
                 i += 1;
             }
             "--seed" => {
@@ -29,6 +34,7 @@ fn main() {
     let opts = sv_nest::StripOptions {
         seed,
         time_limit: Duration::from_secs_f64(secs),
+        max_evaluations: evals,
         ..Default::default()
     };
     let mut first = None;

@@ -920,3 +920,190 @@ impl Bin {
         self.layout.is_collision_free()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use jagua_rs::geometry::primitives::Point;
+    use jagua_rs::geometry::AllowedOrientations;
+    use rand::SeedableRng;
+
+    /// An L-shaped item (not symmetric, so a turn by 180 degrees is a different placement).
+    fn l_item(id: usize, s: f32, rotations: RotationRange) -> Arc<Item> {
+        let pts = [
+            (0.0, 0.0),
+            (s, 0.0),
+            (s, 0.4 * s),
+            (0.4 * s, 0.4 * s),
+            (0.4 * s, s),
+            (0.0, s),
+        ];
+        let shape = SPolygon::new(pts.iter().map(|&(x, y)| Point(x, y)).collect()).unwrap();
+        let orig = OriginalShape {
+            shape,
+            pre_transform: DTransformation::empty(),
+            modify_mode: ShapeModifyMode::Inflate,
+            modify_config: ShapeModifyConfig::default(),
+        };
+        let ao = AllowedOrientations::new(rotations, vec![]).unwrap();
+        Arc::new(
+            Item::new(
+                id,
+                id as u64,
+                orig,
+                ao,
+                None,
+                CDE_CONFIG.item_surrogate_config,
+            )
+            .unwrap(),
+        )
+    }
+
+    fn placed(item: &Arc<Item>, x: f32, y: f32) -> SPolygon {
+        let mut s = item.shape_cd().as_ref().clone();
+        s.transform_from(
+            item.shape_cd(),
+            &DTransformation::new(0.0, (x, y)).compose(),
+        );
+        s
+    }
+
+    #[test]
+    fn overlap_grows_with_penetration_and_never_vanishes() {
+        let it = l_item(0, 10.0, RotationRange::None);
+        let a = placed(&it, 0.0, 0.0);
+        let o: Vec<f32> = [9.5, 8.0, 6.0, 4.0, 2.0, 0.0]
+            .iter()
+            .map(|&x| pair_overlap(&a, &placed(&it, x, 0.0)))
+            .collect();
+        assert!(o.iter().all(|v| v.is_finite() && *v > 0.0), "{o:?}");
+        assert!(o.windows(2).all(|w| w[0] < w[1]), "not increasing: {o:?}");
+        // a big pair weighs more than a small pair at the same relative penetration
+        let big = l_item(1, 20.0, RotationRange::None);
+        let ob = pair_overlap(&placed(&big, 0.0, 0.0), &placed(&big, 8.0, 0.0));
+        assert!(ob > o[4], "{ob} vs {}", o[4]);
+        // outside the container: more outside, more overlap; inside, none counted
+        let cont = rect(0.0, 0.0, 30.0, 30.0);
+        let e1 = ext_overlap(&placed(&it, 25.0, 0.0), cont);
+        let e2 = ext_overlap(&placed(&it, 28.0, 0.0), cont);
+        let e3 = ext_overlap(&placed(&it, 40.0, 0.0), cont);
+        assert!(0.0 < e1 && e1 < e2 && e2 < e3, "{e1} {e2} {e3}");
+    }
+
+    #[test]
+    fn best_samples_keep_the_best_distinct_ones() {
+        let mut b = BestSamples::new(3, 1.0);
+        let dt = |x: f32| DTransformation::new(0.0, (x, 0.0));
+        for (x, e) in [
+            (0.0, 5.0),
+            (0.5, 4.0),
+            (10.0, 3.0),
+            (20.0, 6.0),
+            (30.0, 1.0),
+        ] {
+            b.report(dt(x), e);
+        }
+        let got: Vec<(f32, f32)> = b.v.iter().map(|s| (s.0, s.1.translation().0)).collect();
+        // (0, 5) was replaced by its better neighbour (0.5, 4); (20, 6) did not make the cut
+        assert_eq!(got, vec![(1.0, 30.0), (3.0, 10.0), (4.0, 0.5)]);
+        assert_eq!(b.upper(), 4.0);
+    }
+
+    #[test]
+    fn descent_finds_the_bottom_of_a_bowl_and_never_worsens() {
+        let mut rng = Rng64::seed_from_u64(3);
+        let mut f = |dt: DTransformation, _upper: f32| {
+            let (x, y) = dt.translation();
+            (x - 3.0).powi(2) + 2.0 * (y + 1.0).powi(2) + 0.5 * (dt.rotation() - 0.2).powi(2)
+        };
+        let start_dt = DTransformation::new(0.0, (0.0, 0.0));
+        let start = (f(start_dt, f32::MAX), start_dt);
+        let cfg = Descent {
+            t0: 1.0,
+            t_min: 1e-3,
+            r0: 0.1,
+            r_min: 1e-3,
+            wiggle: true,
+        };
+        let (e, dt) = descend(start, cfg, &mut f, &mut rng);
+        assert!(e <= start.0);
+        let (x, y) = dt.translation();
+        assert!((x - 3.0).abs() < 0.05 && (y + 1.0).abs() < 0.05, "{x} {y}");
+        assert!((dt.rotation() - 0.2).abs() < 0.05, "{}", dt.rotation());
+    }
+
+    #[test]
+    fn separation_pulls_apart_items_dropped_on_one_spot() {
+        let rots = RotationRange::Discrete(vec![0.0, std::f32::consts::PI]);
+        let mut bin = Bin::new(rect(0.0, 0.0, 40.0, 25.0));
+        for k in 0..6 {
+            bin.add(
+                k,
+                &l_item(k, 10.0, rots.clone()),
+                DTransformation::new(0.0, (15.0, 8.0)),
+            );
+        }
+        assert!(!bin.is_feasible());
+        let mut rng = Rng64::seed_from_u64(1);
+        let mut budget = Budget::new(Duration::from_secs(60), Some(2_000_000));
+        let sep = bin.separate_loss(&mut rng, &mut budget, 3, 200);
+        assert!(sep.feasible && sep.loss == 0.0);
+        assert!(bin.is_feasible(), "the engine still sees a collision");
+        for m in &bin.members {
+            let r = m.dt.rotation();
+            assert!(
+                r.abs() < 1e-6 || (r.abs() - std::f32::consts::PI).abs() < 1e-5,
+                "{r}"
+            );
+        }
+    }
+
+    #[test]
+    fn disrupt_swaps_large_items_and_keeps_every_item_with_an_allowed_rotation() {
+        let rots = RotationRange::Discrete(vec![0.0, std::f32::consts::PI]);
+        let mut bin = Bin::new(rect(0.0, 0.0, 100.0, 30.0));
+        let sizes = [20.0, 12.0, 6.0, 6.0, 5.0];
+        let mut x = 0.0;
+        for (k, s) in sizes.iter().enumerate() {
+            let rot = if k % 2 == 0 {
+                0.0
+            } else {
+                std::f32::consts::PI
+            };
+            let t = if rot == 0.0 { (x, 0.0) } else { (x + s, *s) };
+            bin.add(
+                k,
+                &l_item(k, *s, rots.clone()),
+                DTransformation::new(rot, t),
+            );
+            x += s + 1.0;
+        }
+        let before: Vec<(usize, DTransformation)> =
+            bin.members.iter().map(|m| (m.inst, m.dt)).collect();
+        let mut rng = Rng64::seed_from_u64(7);
+        bin.disrupt(&mut rng);
+        let mut insts: Vec<usize> = bin.members.iter().map(|m| m.inst).collect();
+        insts.sort_unstable();
+        assert_eq!(insts, vec![0, 1, 2, 3, 4]);
+        let moved: Vec<usize> = bin
+            .members
+            .iter()
+            .filter(|m| before.iter().any(|(i, dt)| *i == m.inst && *dt != m.dt))
+            .map(|m| m.inst)
+            .collect();
+        assert!(moved.len() >= 2, "moved {moved:?}");
+        // the two largest hold 75 % of the hull area: they are the ones swapped
+        assert!(moved.contains(&0) && moved.contains(&1), "moved {moved:?}");
+        let pos = |k: usize| bin.members.iter().find(|m| m.inst == k).unwrap().dt;
+        let old = |k: usize| before.iter().find(|(i, _)| *i == k).unwrap().1;
+        assert_eq!(pos(0).translation(), old(1).translation());
+        assert_eq!(pos(1).translation(), old(0).translation());
+        for m in &bin.members {
+            let r = m.dt.rotation();
+            assert!(
+                r.abs() < 1e-6 || (r.abs() - std::f32::consts::PI).abs() < 1e-5,
+                "{r}"
+            );
+        }
+    }
+}

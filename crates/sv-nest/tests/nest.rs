@@ -441,19 +441,23 @@ fn dxf_shop_layers_outlines_holes_and_what_is_not_cut() {
 }
 
 fn dataset(name: &str) -> std::path::PathBuf {
-    std::path::PathBuf::from(format!("/work/shared/datasets/nesting/spp/{name}.json"))
+    // the shared material sits beside the repository (`../shared`)
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("../../../shared/datasets/nesting/spp/{name}.json"))
 }
 
 #[test]
-fn esicup_fu_beats_lbf_with_small_budget() {
+fn esicup_fu_far_above_lbf_with_a_fixed_budget() {
     let inst = StripInstance::read(&dataset("fu")).unwrap();
     let opts = StripOptions {
         time_limit: Duration::from_secs(600),
         max_evaluations: Some(400_000),
+        threads: 2,
         ..StripOptions::default()
     };
     let res = nest_strip(&inst, &opts, &mut |_| {});
     assert_eq!(res.placements.len(), 12);
-    // lbf_seed0_density_pct for fu in best_known_spp.csv
-    assert!(res.density * 100.0 > 70.32, "density {}", res.density);
+    // lbf_seed0_density_pct for fu in best_known_spp.csv is 70.32 %; with this fixed budget
+    // the separator reaches 85.8-86.4 % over seeds 0-2
+    assert!(res.density * 100.0 > 85.0, "density {}", res.density);
 }
