@@ -142,6 +142,34 @@ pub(crate) fn rotated_bbox(shape: &SPolygon, rot: f32) -> Rect {
     }
 }
 
+/// Rotated bounding boxes of one shape, remembered for the last few rotations: the samples
+/// and descent steps of one move or insertion come back to the same rotations, and each box
+/// is a pass over every vertex.
+struct RotBoxes<'a> {
+    shape: &'a SPolygon,
+    seen: Vec<(f32, Rect)>,
+}
+
+impl<'a> RotBoxes<'a> {
+    fn new(shape: &'a SPolygon) -> Self {
+        Self {
+            shape,
+            seen: Vec::with_capacity(8),
+        }
+    }
+    fn get(&mut self, rot: f32) -> Rect {
+        if let Some(&(_, rb)) = self.seen.iter().find(|s| s.0 == rot) {
+            return rb;
+        }
+        let rb = rotated_bbox(self.shape, rot);
+        if self.seen.len() == 8 {
+            self.seen.remove(0);
+        }
+        self.seen.push((rot, rb));
+        rb
+    }
+}
+
 pub(crate) fn sample_rotation(item: &Item, rng: &mut Rng64) -> f32 {
     match item.allowed_orientations().rotations() {
         RotationRange::None => 0.0,
@@ -151,9 +179,8 @@ pub(crate) fn sample_rotation(item: &Item, rng: &mut Rng64) -> f32 {
 }
 
 /// A transformation with rotation `rot` and translation uniformly sampled so that the rotated
-/// bounding box lies in `area`.
-fn sample_in(item: &Item, rot: f32, area: Rect, rng: &mut Rng64) -> Option<DTransformation> {
-    let rb = rotated_bbox(item.shape_cd(), rot);
+/// bounding box `rb` lies in `area`.
+fn sample_in(rb: Rect, rot: f32, area: Rect, rng: &mut Rng64) -> Option<DTransformation> {
     let (x0, x1) = (area.x_min - rb.x_min, area.x_max - rb.x_max);
     let (y0, y1) = (area.y_min - rb.y_min, area.y_max - rb.y_max);
     if x1 < x0 || y1 < y0 {
@@ -172,28 +199,20 @@ fn sample_in(item: &Item, rot: f32, area: Rect, rng: &mut Rng64) -> Option<DTran
     Some(DTransformation::new(rot, (tx, ty)))
 }
 
-/// A transformation with rotation `rot` whose rotated bbox centre is uniform in `focus`,
-/// clamped so the bbox lies in `area`.
-fn sample_around(
-    item: &Item,
-    rot: f32,
-    focus: Rect,
-    area: Rect,
-    rng: &mut Rng64,
-) -> Option<DTransformation> {
-    let rb = rotated_bbox(item.shape_cd(), rot);
+/// A transformation with rotation `rot` whose rotated bbox (`rb` about the origin) has its
+/// centre uniform in `focus`, clamped so the bbox lies in `area`.
+fn sample_around(rb: Rect, rot: f32, focus: Rect, area: Rect, rng: &mut Rng64) -> DTransformation {
     let cx = rng.random_range(focus.x_min..=focus.x_max.max(focus.x_min));
     let cy = rng.random_range(focus.y_min..=focus.y_max.max(focus.y_min));
     let t = (
         cx - 0.5 * (rb.x_min + rb.x_max),
         cy - 0.5 * (rb.y_min + rb.y_max),
     );
-    Some(clamp_in(item, rot, t, area))
+    clamp_in(rb, rot, t, area)
 }
 
-/// Clamps a transformation so the rotated bbox stays inside `area` where possible.
-fn clamp_in(item: &Item, rot: f32, t: (f32, f32), area: Rect) -> DTransformation {
-    let rb = rotated_bbox(item.shape_cd(), rot);
+/// Clamps a transformation so the rotated bbox `rb` stays inside `area` where possible.
+fn clamp_in(rb: Rect, rot: f32, t: (f32, f32), area: Rect) -> DTransformation {
     let cl = |v: f32, lo: f32, hi: f32| if hi < lo { lo } else { v.clamp(lo, hi) };
     DTransformation::new(
         rot,
@@ -514,14 +533,15 @@ impl Bin {
             buf.transform_from(item.shape_cd(), &dt.compose());
             !cde.detect_poly_collision(buf, &NoFilter)
         };
+        let mut boxes = RotBoxes::new(item.shape_cd());
         let mut area_try = area;
         for attempt in 0..2 {
             for _ in 0..n_samples {
                 let rot = sample_rotation(item, rng);
-                let Some(dt) = sample_in(item, rot, area_try, rng) else {
+                let rb = boxes.get(rot);
+                let Some(dt) = sample_in(rb, rot, area_try, rng) else {
                     continue;
                 };
-                let rb = rotated_bbox(item.shape_cd(), rot);
                 let sc = score(&rb, dt.translation());
                 if best.is_some_and(|(b, _)| sc >= b) {
                     continue;
@@ -536,12 +556,13 @@ impl Bin {
             area_try = self.bounds;
         }
         let (mut best_sc, mut best_dt) = best?;
-        // refinement: slide left / down with shrinking steps, and try other rotations nearby
+        // refinement: slide left / down with shrinking steps, at the sampled rotation
         let diam = item.shape_cd().diameter();
+        let rot = best_dt.rotation();
+        let rb = boxes.get(rot);
         let mut step = 0.25 * diam;
         while step > 0.002 * diam {
             let mut improved = false;
-            let rot = best_dt.rotation();
             let (tx, ty) = best_dt.translation();
             for (dx, dy) in [
                 (-step, 0.0),
@@ -551,7 +572,6 @@ impl Bin {
                 (0.0, step),
             ] {
                 let dt = DTransformation::new(rot, (tx + dx, ty + dy));
-                let rb = rotated_bbox(item.shape_cd(), rot);
                 let (nx, ny) = dt.translation();
                 if nx + rb.x_min < self.bounds.x_min
                     || nx + rb.x_max > self.bounds.x_max
@@ -668,8 +688,17 @@ impl Bin {
             RotationRange::Continuous
         );
         let mut buf: SPolygon = item.shape_cd().as_ref().clone();
+        // one box cache for the samplers, one inside the evaluation (descent steps leave the
+        // container unless clamped)
+        let mut boxes = RotBoxes::new(item.shape_cd());
+        let mut eval_boxes = RotBoxes::new(item.shape_cd());
         let mut evaluate = |dt: DTransformation, upper: f32| {
-            let dt = clamp_in(&item, dt.rotation(), dt.translation(), bounds);
+            let dt = clamp_in(
+                eval_boxes.get(dt.rotation()),
+                dt.rotation(),
+                dt.translation(),
+                bounds,
+            );
             budget.evals += 1;
             buf.transform_from(item.shape_cd(), &dt.compose());
             self.eval(i, &buf, Some(gls), upper, collector)
@@ -678,10 +707,11 @@ impl Bin {
         best.report(cur, cur_cost);
         for k in 0..75 {
             let rot = sample_rotation(&item, rng);
+            let rb = boxes.get(rot);
             let dt = if k < 25 {
-                sample_around(&item, rot, focus, bounds, rng)
+                Some(sample_around(rb, rot, focus, bounds, rng))
             } else {
-                sample_in(&item, rot, bounds, rng)
+                sample_in(rb, rot, bounds, rng)
             };
             if let Some(dt) = dt {
                 let e = evaluate(dt, best.upper());
@@ -710,7 +740,12 @@ impl Bin {
             return;
         };
         let (e, dt) = descend(start, fine, &mut evaluate, rng);
-        let dt = clamp_in(&item, dt.rotation(), dt.translation(), bounds);
+        let dt = clamp_in(
+            boxes.get(dt.rotation()),
+            dt.rotation(),
+            dt.translation(),
+            bounds,
+        );
         if e < cur_cost && dt != cur {
             self.relocate(i, dt);
         }
