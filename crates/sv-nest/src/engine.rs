@@ -12,7 +12,7 @@ use jagua_rs::collision_detection::CDEConfig;
 use jagua_rs::entities::{Container, Item, Layout, LayoutSnapshot, PItemKey};
 use jagua_rs::geometry::fail_fast::SPSurrogateConfig;
 use jagua_rs::geometry::geo_enums::RotationRange;
-use jagua_rs::geometry::geo_traits::TransformableFrom;
+use jagua_rs::geometry::geo_traits::{CollidesWith, DistanceTo, TransformableFrom};
 use jagua_rs::geometry::primitives::{Rect, SPolygon};
 use jagua_rs::geometry::shape_modification::{ShapeModifyConfig, ShapeModifyMode};
 use jagua_rs::geometry::{DTransformation, OriginalShape};
@@ -274,21 +274,11 @@ fn size_penalty(a: &SPolygon, b: &SPolygon) -> f32 {
 /// entirely outside, its area plus the distance to the container).
 fn ext_overlap(s: &SPolygon, b: Rect) -> f32 {
     let sb = s.bbox();
-    let area = |r: &Rect| (r.x_max - r.x_min).max(0.0) * (r.y_max - r.y_min).max(0.0);
-    let ix = Rect {
-        x_min: sb.x_min.max(b.x_min),
-        y_min: sb.y_min.max(b.y_min),
-        x_max: sb.x_max.min(b.x_max),
-        y_max: sb.y_max.min(b.y_max),
+    let o = match Rect::intersection(sb, b) {
+        Some(inside) => sb.area() - inside.area() + 1e-4 * sb.area(),
+        None => sb.area() + sb.centroid().distance_to(&b.centroid()),
     };
-    let o = if ix.x_max > ix.x_min && ix.y_max > ix.y_min {
-        area(&sb) - area(&ix) + 1e-4 * area(&sb)
-    } else {
-        let (cx, cy) = (0.5 * (sb.x_min + sb.x_max), 0.5 * (sb.y_min + sb.y_max));
-        let (bx, by) = (0.5 * (b.x_min + b.x_max), 0.5 * (b.y_min + b.y_max));
-        area(&sb) + ((cx - bx).powi(2) + (cy - by).powi(2)).sqrt()
-    };
-    2.0 * o.max(0.0).sqrt() * s.surrogate().convex_hull_area.sqrt()
+    2.0 * o.max(0.0).sqrt() * size_penalty(s, s)
 }
 
 /// Up to `cap` best distinct samples of one move (closer than `unique` in translation and with
@@ -395,12 +385,6 @@ fn descend(
     (e, pos)
 }
 
-/// Outcome of [`Bin::separate`]: collision-free, or the least total overlap reached.
-pub(crate) struct Separation {
-    pub feasible: bool,
-    pub loss: f32,
-}
-
 /// Guided-local-search weights per pair (index `n` = container exterior).
 struct Gls {
     n: usize,
@@ -420,6 +404,22 @@ impl Gls {
     fn set(&mut self, i: usize, j: usize, v: f32) {
         self.w[i * (self.n + 1) + j] = v;
         self.w[j * (self.n + 1) + i] = v;
+    }
+    /// Raises the weight of every colliding pair in `ov` by 1.2-2x (the most for the largest
+    /// overlap; capped so weighted sums stay finite when a pair never separates) and decays
+    /// all other weights by 0.95 towards 1.
+    fn update(&mut self, ov: &[(usize, usize, f32)]) {
+        let max_o = ov.iter().map(|o| o.2).fold(0.0, f32::max);
+        let raised: Vec<(usize, usize, f32)> = ov
+            .iter()
+            .map(|&(i, j, o)| (i, j, (self.get(i, j) * (1.2 + 0.8 * o / max_o)).min(1e15)))
+            .collect();
+        for w in &mut self.w {
+            *w = (*w * 0.95).max(1.0);
+        }
+        for (i, j, w) in raised {
+            self.set(i, j, w);
+        }
     }
 }
 
@@ -764,27 +764,24 @@ impl Bin {
         max_strikes: usize,
         max_no_improve: usize,
     ) -> bool {
-        self.separate_loss(rng, budget, max_strikes, max_no_improve)
-            .feasible
+        self.separate_loss(rng, budget, max_strikes, max_no_improve) == 0.0
     }
 
-    /// [`Bin::separate`] that also reports the least total overlap reached.
+    /// [`Bin::separate`] returning the least total overlap reached: 0 exactly when the layout
+    /// is collision-free (the overlap of a colliding pair is always positive).
     pub fn separate_loss(
         &mut self,
         rng: &mut Rng64,
         budget: &mut Budget,
         max_strikes: usize,
         max_no_improve: usize,
-    ) -> Separation {
+    ) -> f32 {
         let n = self.members.len();
         let mut gls = Gls::new(n);
         let mut collector = BasicHazardCollector::new();
         let mut ov = self.overlaps(&mut collector);
         if ov.is_empty() {
-            return Separation {
-                feasible: true,
-                loss: 0.0,
-            };
+            return 0.0;
         }
         let total = |ov: &[(usize, usize, f32)]| ov.iter().map(|o| o.2).sum::<f32>();
         let mut min_loss = total(&ov);
@@ -807,10 +804,7 @@ impl Bin {
                 }
                 ov = self.overlaps(&mut collector);
                 if ov.is_empty() {
-                    return Separation {
-                        feasible: true,
-                        loss: 0.0,
-                    };
+                    return 0.0;
                 }
                 let loss = total(&ov);
                 if loss < min_loss {
@@ -822,34 +816,18 @@ impl Bin {
                 } else {
                     no_imp += 1;
                 }
-                let max_o = ov.iter().map(|o| o.2).fold(0.0, f32::max);
-                let mut hit = vec![false; (n + 1) * (n + 1)];
-                for &(i, j, o) in &ov {
-                    // capped so weighted sums stay finite when a pair never separates
-                    let w = (gls.get(i, j) * (1.2 + 0.8 * o / max_o)).min(1e15);
-                    gls.set(i, j, w);
-                    hit[i * (n + 1) + j] = true;
-                    hit[j * (n + 1) + i] = true;
-                }
-                for (k, w) in gls.w.iter_mut().enumerate() {
-                    if !hit[k] {
-                        *w = (*w * 0.95).max(1.0);
-                    }
-                }
+                gls.update(&ov);
             }
             if strike_start * 0.98 <= min_loss {
                 strikes += 1;
             } else {
                 strikes = 0;
             }
+            // every round ends in the least-overlapping state (also when it is the last)
             self.restore(&best_snap);
             ov = self.overlaps(&mut collector);
         }
-        self.restore(&best_snap);
-        Separation {
-            feasible: false,
-            loss: min_loss,
-        }
+        min_loss
     }
 
     /// Moves the container's right edge to `x_max`: the items whose bbox centre is right of
@@ -925,14 +903,7 @@ impl Bin {
             let shape = bin.placed_shape(k);
             (0..n)
                 .filter(|&j| j != a && j != b)
-                .filter(|&j| {
-                    let c = bin.placed_shape(j).poi().center;
-                    shape.bbox().x_min <= c.0
-                        && c.0 <= shape.bbox().x_max
-                        && shape.bbox().y_min <= c.1
-                        && c.1 <= shape.bbox().y_max
-                        && jagua_rs::geometry::geo_traits::CollidesWith::collides_with(shape, &c)
-                })
+                .filter(|&j| shape.collides_with(&bin.placed_shape(j).poi().center))
                 .collect()
         };
         let (ra, rb) = (riders(self, a), riders(self, b));
@@ -1081,8 +1052,8 @@ mod tests {
         assert!(!bin.is_feasible());
         let mut rng = Rng64::seed_from_u64(1);
         let mut budget = Budget::new(Duration::from_secs(60), Some(2_000_000));
-        let sep = bin.separate_loss(&mut rng, &mut budget, 3, 200);
-        assert!(sep.feasible && sep.loss == 0.0);
+        let loss = bin.separate_loss(&mut rng, &mut budget, 3, 200);
+        assert_eq!(loss, 0.0);
         assert!(bin.is_feasible(), "the engine still sees a collision");
         for m in &bin.members {
             let r = m.dt.rotation();

@@ -234,12 +234,6 @@ fn nest_strip_one(
     };
     let mut best_len = fit(&mut bin);
     let mut best = bin.save();
-    progress(&Progress {
-        elapsed_s: budget.elapsed().as_secs_f64(),
-        evaluations: budget.evals,
-        best: f64::from(best_len),
-        density: density_of(best_len),
-    });
     let report = |len: f32, budget: &Budget, progress: &mut dyn FnMut(&Progress)| {
         progress(&Progress {
             elapsed_s: budget.elapsed().as_secs_f64(),
@@ -248,13 +242,15 @@ fn nest_strip_one(
             density: density_of(len),
         });
     };
+    report(best_len, &budget, progress);
     // exploration (sparrow): shrink a little after each success; after a failure, restart
     // from one of the failed layouts at the same length (the less overlap, the likelier),
     // disrupted by swapping two large items
     let mut pool: Vec<(f32, crate::engine::BinSnapshot)> = Vec::new();
-    while !budget.done() && budget.fraction() < EXPLORE_SHARE {
-        let sep = bin.separate_loss(&mut rng, &mut budget, 3, 200);
-        if sep.feasible {
+    // (a spent budget has fraction 1)
+    while budget.fraction() < EXPLORE_SHARE {
+        let loss = bin.separate_loss(&mut rng, &mut budget, 3, 200);
+        if loss == 0.0 {
             let used = fit(&mut bin);
             let width = used - inset;
             if used < best_len {
@@ -266,27 +262,29 @@ fn nest_strip_one(
             let next = inset + (width - inset) * (1.0 - EXPLORE_SHRINK);
             bin.shrink_at(inset + 0.5 * (width - inset), next);
         } else if !budget.done() {
-            let at = pool.partition_point(|p| p.0 <= sep.loss);
-            pool.insert(at, (sep.loss, bin.save()));
+            let at = pool.partition_point(|p| p.0 <= loss);
+            pool.insert(at, (loss, bin.save()));
             let k = ((half_normal(&mut rng) * 0.25).min(0.999) * pool.len() as f32) as usize;
-            bin.restore(&pool[k.min(pool.len() - 1)].1);
+            bin.restore(&pool[k].1);
             bin.disrupt(&mut rng);
         }
     }
     // compression: from the best layout, shrink at a random place by a ratio falling from
     // 0.05 % to 0.001 % over the rest of the budget
     let start = budget.fraction();
+    bin.restore(&best);
     while !budget.done() {
         let t = ((budget.fraction() - start) / (1.0 - start).max(1e-6)).clamp(0.0, 1.0);
         let r = 5e-4 + t * (1e-5 - 5e-4);
-        bin.restore(&best);
         let len = best_len - inset;
         let split = rng.random_range(inset..len.max(inset + 1e-6));
         bin.shrink_at(split, inset + (len - inset) * (1.0 - r));
-        if bin.separate_loss(&mut rng, &mut budget, 5, 100).feasible {
+        if bin.separate(&mut rng, &mut budget, 5, 100) {
             best_len = fit(&mut bin);
             best = bin.save();
             report(best_len, &budget, progress);
+        } else {
+            bin.restore(&best);
         }
     }
     bin.restore(&best);
