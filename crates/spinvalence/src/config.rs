@@ -50,7 +50,9 @@ pub struct BuildConfig {
     pub target: String,
     /// Output directory.
     pub out: PathBuf,
-    /// The layout of the hub mesh.
+    /// The layout of the hub mesh (not printed while it holds no layout: it has no default
+    /// to show).
+    #[serde(skip_serializing_if = "SurfaceConfig::is_default")]
     pub surface: SurfaceConfig,
     /// Secondary (hub) mesh options.
     pub secondary: SecondaryOptions,
@@ -73,6 +75,12 @@ pub struct SurfaceConfig {
     /// layout is automatic.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub layout: Option<PathBuf>,
+}
+
+impl SurfaceConfig {
+    fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 /// `[nest]`: the strips on plasma sheets. The part spacing is the profile's kerf plus

@@ -472,11 +472,18 @@ fn strips_end_at_vertices_of_odd_valence_on_an_irregular_mesh() {
                 "{direction:?}: no strip ends at vertex {v}: {chains:?}"
             );
         }
-        // and the whole frame unrolls
+        // and the whole frame unrolls, every unit in one strip
         let options = StripOptions {
             direction,
             ..Default::default()
         };
-        check_unrolled(&f, &options);
+        let strips = unroll(&f, &options).unwrap();
+        let mut placed: Vec<usize> = strips.iter().flat_map(|s| s.units.clone()).collect();
+        placed.sort_unstable();
+        assert_eq!(
+            placed,
+            (0..tiles.len()).collect::<Vec<_>>(),
+            "{direction:?}"
+        );
     }
 }

@@ -236,6 +236,7 @@ pub(crate) fn optimise_indexed(
     let (mut cols, mut vals) = (Vec::with_capacity(16), Vec::with_capacity(16));
     let mut dx = vec![0.0; n];
     let mut hard: Real = 1.0;
+    let goals = Goals::default();
     for it in 0..opts.max_iterations {
         iterations = it + 1;
         let decay = (0.5f64).powf(it as Real / 10.0).max(0.1);
@@ -537,8 +538,8 @@ pub(crate) fn optimise_indexed(
             .filter(|f| edge_ratio(&f.map(|v| pos(&x, v))) <= crate::EDGE_RATIO_LIMIT)
             .count() as Real
             / nf as Real;
-        let soft_met = far <= STOP_CLOSENESS * opts.closeness_tolerance
-            && square >= Goals::default().edge_ratio_fraction;
+        let soft_met =
+            far <= STOP_CLOSENESS * opts.closeness_tolerance && square >= goals.edge_ratio_fraction;
         // stalled: tiny steps while the hard weights no longer grow
         let stalled = step * max_move < 1e-3
             && max_move <= opts.max_step
