@@ -246,10 +246,8 @@ pub(crate) fn layout_mesh_indexed(
             grid[i][0] = bottom[i];
             grid[i][m] = top[i];
         }
-        for j in 0..=m {
-            grid[0][j] = left[j];
-            grid[n][j] = right[j];
-        }
+        grid[0].copy_from_slice(&left);
+        grid[n].copy_from_slice(&right);
         let pt = |v: usize, vs: &[Point3]| vs[v].coords;
         for i in 1..n {
             for j in 1..m {
