@@ -72,21 +72,27 @@ impl Topology {
             .filter(|(v, _)| !boundary[*v])
             .map(|(vertex, faces)| Star { vertex, faces })
             .collect();
-        let mut triples = Vec::new();
-        for s in &stars {
-            if s.faces.len() == 4 {
-                let nb: Vec<usize> = s
-                    .faces
-                    .iter()
-                    .map(|&(f, k)| mesh.faces[f][(k + 1) % 4])
-                    .collect();
-                triples.push([nb[0], s.vertex, nb[2]]);
-                triples.push([nb[1], s.vertex, nb[3]]);
-            }
+        // in vertex order (the order of the optimiser's rows)
+        let mut star_at = vec![None; nv];
+        for (i, s) in stars.iter().enumerate() {
+            star_at[s.vertex] = Some(i);
         }
+        let mut triples = Vec::new();
         for v in 0..nv {
-            if boundary[v] && count[v] == 2 && boundary_nb[v].len() == 2 {
-                triples.push([boundary_nb[v][0], v, boundary_nb[v][1]]);
+            match star_at[v].map(|i| &stars[i]) {
+                Some(s) if s.faces.len() == 4 => {
+                    let nb: Vec<usize> = s
+                        .faces
+                        .iter()
+                        .map(|&(f, k)| mesh.faces[f][(k + 1) % 4])
+                        .collect();
+                    triples.push([nb[0], v, nb[2]]);
+                    triples.push([nb[1], v, nb[3]]);
+                }
+                _ if boundary[v] && count[v] == 2 && boundary_nb[v].len() == 2 => {
+                    triples.push([boundary_nb[v][0], v, boundary_nb[v][1]]);
+                }
+                _ => {}
             }
         }
         let corner = (0..nv).map(|v| boundary[v] && count[v] != 2).collect();
