@@ -88,3 +88,38 @@ fn drive_the_page(url: &str) {
         "token in a URL: {urls:?}"
     );
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_twenty_thousand_unit_frame_loads_in_the_page() {
+    let mut cfg = config();
+    cfg.frame = big_frame(200, 100);
+    let server = Server::start(cfg).await.unwrap();
+    let url = format!("{}#token={TOKEN}", server.url());
+    tokio::task::spawn_blocking(move || {
+        let browser = Browser::launch().unwrap();
+        let mut page = browser.open(&url).unwrap();
+        page.wait_for(
+            "document.body.dataset.units === '20000' && document.body.dataset.progress === '0/20000'",
+            Duration::from_secs(120),
+            "20,000 units in the page",
+        )
+        .unwrap();
+        page.pump(Duration::from_millis(500)).unwrap();
+        let image = page.screenshot("#view canvas").unwrap();
+        assert!(
+            image.fraction_unlike([0x10, 0x13, 0x17], 8) > 0.01,
+            "blank 3D view of 20,000 units"
+        );
+        // one connection: the pages never closed it
+        let sockets = page
+            .requests()
+            .iter()
+            .filter(|r| r.kind == "WebSocket")
+            .count();
+        assert_eq!(sockets, 1, "{:?}", page.requests());
+        assert!(page.errors().is_empty(), "page errors: {:?}", page.errors());
+    })
+    .await
+    .unwrap();
+    server.shutdown().await;
+}
