@@ -438,6 +438,8 @@ function handle(msg) {
   }
 }
 
+state.handle = handle; // tests feed it hostile server messages
+
 function applyEvent(ev) {
   if (typeof ev.seq === 'number') state.seq = Math.max(state.seq, ev.seq);
   switch (ev.type) {

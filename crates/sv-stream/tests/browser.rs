@@ -79,6 +79,34 @@ fn drive_the_page(url: &str) {
         "blank 3D view: {} colours",
         image.distinct_colours()
     );
+    // figures with enough digits to tell ok from bad, and a malformed check clears the verdict
+    let unit = next.as_str().unwrap();
+    let text = |page: &mut sv_browser::Page, pos: f64, ok: bool| {
+        page.eval(&format!(
+            "window.__sv.handle({{type: 'check', unit: '{unit}', part: 'hub', ok: {ok}, \
+             position_error_mm: {pos}, angle_error_deg: 0.2, move_mm: [1, 0, 0], frame: 'model', \
+             coalesced: 0}}); document.getElementById('check').textContent"
+        ))
+        .unwrap()
+        .as_str()
+        .unwrap()
+        .to_string()
+    };
+    let ok = text(&mut page, 4.99, true);
+    assert!(ok.contains("4.99 mm <= 5.00 mm"), "{ok}");
+    let bad = text(&mut page, 5.01, false);
+    assert!(bad.contains("5.01 mm > 5.00 mm"), "{bad}");
+    let close = text(&mut page, 5.0004, false);
+    assert!(close.contains("5.0004 mm > 5.00 mm"), "{close}");
+    // (one script: the simulated tracker's next check cannot come in between)
+    let after = page
+        .eval(&format!(
+            "window.__sv.handle({{type: 'check', unit: '{unit}', part: 'hub', ok: true, \
+             position_error_mm: null, angle_error_deg: 0.1, move_mm: [0, 0, 0], coalesced: 0}}); \
+             document.body.dataset.check"
+        ))
+        .unwrap();
+    assert_eq!(after, "none", "a malformed check left a verdict");
     assert!(page.errors().is_empty(), "page errors: {:?}", page.errors());
     // the token never went to the server in a URL
     let urls: Vec<&str> = page.requests().iter().map(|r| r.url.as_str()).collect();

@@ -270,7 +270,8 @@ fn place_plate(page: &mut Page, site: &Isometry3, unit: usize, off: Vector3) -> 
 /// Pick the three hub corners: a controller ray from 30 cm above each (headset), or the
 /// phone held 40 cm above each, looking down, tapped at the screen centre.
 fn pick_corners(page: &mut Page, corners: &[[f64; 3]], phone: bool) {
-    for (k, c) in corners.iter().take(3).enumerate() {
+    let n = eval(page, "window.__sv.measure.need").as_u64().unwrap() as usize;
+    for (k, c) in corners.iter().take(n).enumerate() {
         let before = eval(page, "window.__hits || 0").as_u64().unwrap();
         if phone {
             eval(
@@ -459,6 +460,47 @@ fn scenario(phone: bool) {
     assert!(
         s.ar_tracks() >= 2,
         "the measured tracks were not recorded as source ar"
+    );
+
+    // a hub overlap picked as two points on the plate, with the first linked neighbour
+    let mut neighbours: Vec<usize> = f
+        .links
+        .iter()
+        .filter_map(|l| match l.units {
+            [a, b] if a == u => Some(b),
+            [a, b] if b == u => Some(a),
+            _ => None,
+        })
+        .collect();
+    neighbours.sort_unstable();
+    let design = f
+        .links
+        .iter()
+        .find(|l| l.units == [u, neighbours[0]] || l.units == [neighbours[0], u])
+        .unwrap()
+        .hub_overlap;
+    let corners = place_plate(&mut page, &site, u, Vector3::zeros());
+    let (a, b) = (Vector3::from(corners[0]), Vector3::from(corners[1]));
+    // a length away from a rounding boundary of the 2 decimals shown (hits are float32)
+    let picked = ((design.abs() + 0.5) * 100.0).round() / 100.0 + 0.003;
+    let end = a + (b - a).normalize() * (picked / 1000.0);
+    press(&mut page, "overlap", "measure-overlap", phone);
+    wait(&mut page, "window.__sv.measure !== null", "overlap mode");
+    pick_corners(&mut page, &[corners[0], [end.x, end.y, end.z]], phone);
+    wait(
+        &mut page,
+        &format!(
+            "document.getElementById('message').textContent.includes('{design:.2} mm design')"
+        ),
+        "the overlap check",
+    );
+    let shown = eval(&mut page, "document.getElementById('message').textContent");
+    assert!(
+        shown
+            .as_str()
+            .unwrap()
+            .contains(&format!("{picked:.2} mm measured")),
+        "{shown}"
     );
 
     // the server goes away: offline in AR, Complete confirmed and queued

@@ -172,87 +172,59 @@ impl<S: AsyncRead + AsyncWrite + Unpin> Client<S> {
 
 /// A synthetic flat frame of `nx x ny` units on a 300 mm grid (no solve: for size tests).
 /// Hubs are diamonds at z = 100, primary tiles turned squares at z = 0, strips by row,
-/// links between grid neighbours with a 10 mm design overlap.
+/// links between grid neighbours with a 10 mm design overlap. Records are cloned from the
+/// solved [`frame`] and only their corners, ids and links changed, so the helper keeps up
+/// with new fields of `frame.json`.
 pub fn big_frame(nx: usize, ny: usize) -> FrameFile {
-    use sv_frame::{FrameParams, LinkRecord, MeshData, UnitRecord};
+    let base = frame();
     let step = 300.0;
-    let mut vertices = Vec::new();
-    for j in 0..=ny {
-        for i in 0..=nx {
-            vertices.push([i as f64 * step, j as f64 * step, 100.0]);
-        }
-    }
-    let v = |i: usize, j: usize| j * (nx + 1) + i;
-    let mut faces = Vec::new();
-    let mut units = Vec::new();
+    let mut units = Vec::with_capacity(nx * ny);
     for j in 0..ny {
         for i in 0..nx {
-            faces.push([v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)]);
             let (cx, cy) = ((i as f64 + 0.5) * step, (j as f64 + 0.5) * step);
             let r = 0.5 * step;
-            let hub = [
+            let (c, s) = (0.3f64.cos() * 0.45 * step, 0.3f64.sin() * 0.45 * step);
+            let mut u = base.units[0].clone();
+            u.id = format!("A{j:03}-{i:03}");
+            u.strip = format!("A{j:03}");
+            u.face = (j * nx + i) % base.units.len();
+            u.hub = [
                 [cx + r, cy, 100.0],
                 [cx, cy + r, 100.0],
                 [cx - r, cy, 100.0],
                 [cx, cy - r, 100.0],
             ];
-            let (c, s) = (0.3f64.cos() * 0.45 * step, 0.3f64.sin() * 0.45 * step);
-            let primary = [
+            u.primary = [
                 [cx + c, cy + s, 0.0],
                 [cx - s, cy + c, 0.0],
                 [cx - c, cy - s, 0.0],
                 [cx + s, cy - c, 0.0],
             ];
-            units.push(UnitRecord {
-                id: format!("A{j:03}-{i:03}"),
-                face: faces.len() - 1,
-                strip: format!("A{j:03}"),
-                theta: 0.3,
-                phi: 0.0,
-                hub,
-                primary,
-                axis_case: None,
-                side: None,
-                depth: Some(100.0),
-            });
+            units.push(u);
         }
     }
     let mut links = Vec::new();
+    let link = |a: usize, b: usize| {
+        let mut l = base.links[0].clone();
+        l.units = [a, b];
+        l.hub_overlap = 10.0;
+        l
+    };
     for j in 0..ny {
         for i in 0..nx {
             let u = j * nx + i;
             if i + 1 < nx {
-                links.push(LinkRecord {
-                    units: [u, u + 1],
-                    edge: [v(i + 1, j), v(i + 1, j + 1)],
-                    primary_gap: 0.0,
-                    hub_overlap: 10.0,
-                    slots: None,
-                });
+                links.push(link(u, u + 1));
             }
             if j + 1 < ny {
-                links.push(LinkRecord {
-                    units: [u, u + nx],
-                    edge: [v(i, j + 1), v(i + 1, j + 1)],
-                    primary_gap: 0.0,
-                    hub_overlap: 10.0,
-                    slots: None,
-                });
+                links.push(link(u, u + nx));
             }
         }
     }
     FrameFile {
-        format: sv_frame::FRAME_FORMAT.into(),
-        version: 1,
-        length_unit: "mm".into(),
-        params: FrameParams {
-            spin_angle: 0.3,
-            expansion: 1.0,
-        },
-        mesh: MeshData { vertices, faces },
         units,
         links,
-        solve: None,
+        ..base
     }
 }
 
