@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use anyhow::{anyhow, bail, Result};
 use sv_export::SheetPart;
 use sv_nest::sheets::LeftOut;
-use sv_nest::{NestOptions, RotationMode, StockSheet, StripInstance, StripOptions};
+use sv_nest::{NestOptions, Part, RotationMode, StockSheet, StripInstance, StripOptions};
 
 use crate::cli::NestArgs;
 use crate::output::{self, number, AtomicDir, AtomicFiles};
@@ -95,15 +95,17 @@ pub fn run(args: &NestArgs) -> Result<()> {
             .filter(|s| !stems.contains(s) && !s.is_empty())
             .unwrap_or_else(|| name.clone());
         stems.push(stem.clone());
-        match sv_nest::dxf::parse_parts(&text, &stem) {
+        match sv_dxf::parse_parts(&text, &stem) {
             Ok(read) => {
                 // the parts with what they etch (labels and fold marks of a strip DXF)
-                parts.extend(
-                    read.parts
-                        .into_iter()
-                        .zip(read.etch)
-                        .map(|(part, etch)| SheetPart { part, etch }),
-                );
+                parts.extend(read.parts.into_iter().map(|p| SheetPart {
+                    part: Part {
+                        id: p.id,
+                        outer: p.outer,
+                        holes: p.holes,
+                    },
+                    etch: p.etch,
+                }));
                 left_out.extend(read.rejected.into_iter().map(|e| LeftOut {
                     part: name.clone(),
                     reason: e.to_string(),

@@ -50,7 +50,7 @@ pub fn run(
         let stem = sv_export::sheet_file_stem(i, sheet.width, sheet.height, thickness);
         let dxf = sv_export::sheet_dxf(&report, i, parts, &caption)
             .map_err(|e| anyhow!("nesting: {e}"))?;
-        let svg = sv_nest::svg::sheet_svg(&report, &plain, i, sv_nest::DEFAULT_FLATTEN_TOLERANCE);
+        let svg = sv_export::sheet_svg(&report, &plain, i);
         sheet_files.push(format!("sheets/{stem}.dxf"));
         drawings.push((format!("{stem}.dxf"), dxf));
         drawings.push((format!("{stem}.svg"), svg));

@@ -7,11 +7,12 @@
 //! label (`TEXT` on `INFO`). The sheet outline, the sheet title and the reusable offcut
 //! are on `INFO` too.
 
-use sv_nest::part::{boundary_distance, point_in_polygon, polygon_area};
-use sv_nest::{Contour, NestReport, Part, Vertex};
+use sv_dxf::{Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
+use sv_geom::planar::{bbox, boundary_distance, point_in_polygon, polygon_area};
+use sv_nest::{NestReport, Part};
 use sv_strips::{FlatStrip, StripProfile};
 
-use crate::dxf::{etch_strokes, Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
+use crate::strip::etch_strokes;
 
 /// Chord tolerance (mm) for the pierce-point search.
 const FLATTEN: f64 = 0.05;
@@ -36,28 +37,14 @@ impl SheetPart {
     }
 }
 
-fn contour(c: &sv_strips::Contour) -> Contour {
-    Contour {
-        vertices: c
-            .0
-            .iter()
-            .map(|v| Vertex {
-                x: v[0],
-                y: v[1],
-                bulge: v[2],
-            })
-            .collect(),
-    }
-}
-
 /// The nesting part of a profiled strip: outline, slots as holes, labels and fold marks as
 /// etching, in the strip's frame (the coordinates of `strips/ID.dxf` and `strips.json`).
 pub fn strip_sheet_part(strip: &FlatStrip, profile: &StripProfile) -> SheetPart {
     SheetPart {
         part: Part {
             id: strip.id.clone(),
-            outer: contour(&profile.outline),
-            holes: profile.cuts.iter().map(contour).collect(),
+            outer: profile.outline.clone(),
+            holes: profile.cuts.clone(),
         },
         etch: etch_strokes(profile),
     }
@@ -99,7 +86,7 @@ impl Placed {
     fn new(part: Part) -> Self {
         let outer = part.outer.flatten(FLATTEN);
         let holes = part.holes.iter().map(|h| h.flatten(FLATTEN)).collect();
-        let (lo, hi) = sv_nest::part::bbox(&outer);
+        let (lo, hi) = bbox(&outer);
         Self {
             part,
             outer,
@@ -131,7 +118,7 @@ impl Placed {
 /// thin slot one of them lands on its centre line, which a grid would miss), then a local
 /// grid refinement around the best.
 fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
-    let (lo, hi) = sv_nest::part::bbox(poly);
+    let (lo, hi) = bbox(poly);
     let reach = (hi[0] - lo[0]).min(hi[1] - lo[1]);
     let ccw = polygon_area(poly) > 0.0;
     let mut best = ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], -1.0);
@@ -291,10 +278,10 @@ pub fn sheet_dxf(
     d.polygon(LAYER_INFO, &[[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]]);
     for (k, p) in placed.iter().enumerate() {
         for (hole, flat) in p.part.holes.iter().zip(&p.holes) {
-            d.polyline(LAYER_INSIDE, &bulged(hole), true);
+            d.contour(LAYER_INSIDE, hole);
             d.point(LAYER_INFO, deepest_point(flat).0);
         }
-        d.polyline(LAYER_OUTSIDE, &bulged(&p.part.outer), true);
+        d.contour(LAYER_OUTSIDE, &p.part.outer);
         d.point(LAYER_INFO, outside_pierce(&placed, k, offset, [w, h]));
         for l in &etch[k] {
             d.open_line(LAYER_ETCH, l);
@@ -340,10 +327,6 @@ pub fn sheet_dxf(
     }
     d.text(LAYER_INFO, &title, [0.0, -60.0], 30.0);
     Ok(d.finish([-10.0, -80.0], [w + 10.0, h + 10.0]))
-}
-
-fn bulged(c: &Contour) -> Vec<[f64; 3]> {
-    c.vertices.iter().map(|v| [v.x, v.y, v.bulge]).collect()
 }
 
 #[cfg(test)]

@@ -12,37 +12,36 @@
 //! is a hole of the smallest outline containing it (one outside every outline is rejected
 //! by name); a file without one (layer `0` and the like) is nested by containment alone.
 
-use std::path::Path;
+use sv_geom::planar::{point_in_polygon, polygon_area};
+use sv_geom::{Contour, Vertex};
 
-use crate::part::{point_in_polygon, polygon_area, Contour, Part, Vertex};
-use crate::NestError;
+use crate::DxfError;
 
 /// Endpoint matching tolerance (drawing units) when chaining LINE/ARC entities.
 pub const DEFAULT_CHAIN_TOLERANCE: f64 = 1e-3;
+
+/// A part as read from a file: its outline, its holes and what it etches, in the file's
+/// coordinates (mm).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DxfPart {
+    /// The file's name, with `#k` when the file holds several parts.
+    pub id: String,
+    /// The outline.
+    pub outer: Contour,
+    /// The holes.
+    pub holes: Vec<Contour>,
+    /// The `ETCH` polylines and lines whose first point lies on the part (not cut, not
+    /// nested; drawn on the sheet).
+    pub etch: Vec<Vec<[f64; 2]>>,
+}
 
 /// Parts read from a DXF plus per-contour problems (open chains, ...).
 #[derive(Clone, Debug, Default)]
 pub struct DxfParts {
     /// parts built from closed contours
-    pub parts: Vec<Part>,
+    pub parts: Vec<DxfPart>,
     /// contours that were rejected, each naming its part/contour
-    pub rejected: Vec<NestError>,
-    /// per part (parallel to `parts`), what it etches: the `ETCH` polylines and lines whose
-    /// first point lies on it, in the part's frame (not cut, not nested; drawn on the sheet)
-    pub etch: Vec<Vec<Vec<[f64; 2]>>>,
-}
-
-/// Reads a DXF file; part ids are the file stem (with `#k` when the file holds several parts).
-pub fn read_parts(path: &Path) -> Result<DxfParts, NestError> {
-    let text = std::fs::read(path).map_err(|e| NestError::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })?;
-    let text = String::from_utf8_lossy(&text);
-    let stem = path
-        .file_stem()
-        .map_or_else(|| "part".to_string(), |s| s.to_string_lossy().into_owned());
-    parse_parts(&text, &stem)
+    pub rejected: Vec<DxfError>,
 }
 
 #[derive(Clone, Copy)]
@@ -60,8 +59,8 @@ struct Read {
 }
 
 /// Parses DXF text; `name` prefixes part ids.
-pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
-    let err = |line: usize, m: &str| NestError::Dxf {
+pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, DxfError> {
+    let err = |line: usize, m: &str| DxfError::Dxf {
         file: name.to_string(),
         message: format!("line {line}: {m}"),
     };
@@ -109,7 +108,7 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
             .map_or(String::new(), |p| p.1.to_ascii_uppercase())
     };
     let not_cut = |layer: &str| layer == "INFO";
-    let num = |v: &str, line: usize| -> Result<f64, NestError> {
+    let num = |v: &str, line: usize| -> Result<f64, DxfError> {
         v.parse::<f64>()
             .ok()
             .filter(|x| x.is_finite())
@@ -138,9 +137,9 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
         }
         let get = |c: i32| ent.iter().find(|p| p.0 == c);
         let getf =
-            |c: i32, d: f64| -> Result<f64, NestError> { get(c).map_or(Ok(d), |p| num(p.1, p.2)) };
+            |c: i32, d: f64| -> Result<f64, DxfError> { get(c).map_or(Ok(d), |p| num(p.1, p.2)) };
         // the vertices of an LWPOLYLINE (10/20 pairs, 42 bulges)
-        let lw_vertices = || -> Result<Vec<Vertex>, NestError> {
+        let lw_vertices = || -> Result<Vec<Vertex>, DxfError> {
             let mut vs: Vec<Vertex> = Vec::new();
             for p in &ent[1..] {
                 match p.0 {
@@ -195,7 +194,7 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
                 e += 1;
                 while e < ents.len() && ents[e][0].1 == "VERTEX" {
                     let v = ents[e];
-                    let f = |c: i32| -> Result<f64, NestError> {
+                    let f = |c: i32| -> Result<f64, DxfError> {
                         v.iter()
                             .find(|p| p.0 == c)
                             .map_or(Ok(0.0), |p| num(p.1, p.2))
@@ -222,7 +221,7 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
                         outside,
                     });
                 } else {
-                    rejected.push(NestError::BadPart {
+                    rejected.push(DxfError::BadPart {
                         part: format!("{name} (circle at line {})", ent[0].2),
                         reason: "zero radius".into(),
                     });
@@ -260,16 +259,17 @@ pub fn parse_parts(text: &str, name: &str) -> Result<DxfParts, NestError> {
         group(contours.into_iter().map(|c| c.contour).collect(), name)
     };
     let etch = etch_of(&parts, etch);
-    Ok(DxfParts {
-        parts,
-        rejected,
-        etch,
-    })
+    let parts = parts
+        .into_iter()
+        .zip(etch)
+        .map(|(p, etch)| DxfPart { etch, ..p })
+        .collect();
+    Ok(DxfParts { parts, rejected })
 }
 
 /// Each etched polyline goes with the smallest part whose outline holds its first point;
 /// one on no part is dropped.
-fn etch_of(parts: &[Part], lines: Vec<Vec<[f64; 2]>>) -> Vec<Vec<Vec<[f64; 2]>>> {
+fn etch_of(parts: &[DxfPart], lines: Vec<Vec<[f64; 2]>>) -> Vec<Vec<Vec<[f64; 2]>>> {
     let (flat, area) = flat_areas(parts.iter().map(|p| &p.outer));
     let mut out = vec![Vec::new(); parts.len()];
     for l in lines {
@@ -286,7 +286,7 @@ fn push_polyline(
     (line, outside): (usize, bool),
     name: &str,
     out: &mut Vec<Read>,
-    rejected: &mut Vec<NestError>,
+    rejected: &mut Vec<DxfError>,
 ) {
     let same = |a: &Vertex, b: &Vertex| (a.x - b.x).abs() < 1e-9 && (a.y - b.y).abs() < 1e-9;
     let closed = closed_flag || (vs.len() > 2 && same(&vs[0], &vs[vs.len() - 1]));
@@ -294,12 +294,12 @@ fn push_polyline(
         vs.pop();
     }
     if !closed {
-        rejected.push(NestError::BadPart {
+        rejected.push(DxfError::BadPart {
             part: format!("{name} (polyline at line {line})"),
             reason: "open contour".into(),
         });
     } else if vs.len() < 2 {
-        rejected.push(NestError::BadPart {
+        rejected.push(DxfError::BadPart {
             part: format!("{name} (polyline at line {line})"),
             reason: "fewer than 2 vertices (zero size)".into(),
         });
@@ -311,7 +311,7 @@ fn push_polyline(
     }
 }
 
-fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Read>, rejected: &mut Vec<NestError>) {
+fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Read>, rejected: &mut Vec<DxfError>) {
     let tol = DEFAULT_CHAIN_TOLERANCE;
     let close = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]) <= tol;
     while let Some(first) = segs.pop() {
@@ -355,7 +355,7 @@ fn chain(mut segs: Vec<Seg>, name: &str, out: &mut Vec<Read>, rejected: &mut Vec
             });
         } else {
             let p = chain[0].a;
-            rejected.push(NestError::BadPart {
+            rejected.push(DxfError::BadPart {
                 part: format!("{name} (LINE/ARC chain from ({:.3}, {:.3}))", p[0], p[1]),
                 reason: "open contour".into(),
             });
@@ -388,24 +388,25 @@ fn flat_areas<'a>(contours: impl Iterator<Item = &'a Contour>) -> (Vec<Vec<[f64;
 
 /// Parts of a file with shop layers: each `OUTSIDE` contour is an outline (in file order),
 /// every other contour a hole of the smallest outline containing its first point.
-fn by_layer(contours: Vec<Read>, name: &str, rejected: &mut Vec<NestError>) -> Vec<Part> {
+fn by_layer(contours: Vec<Read>, name: &str, rejected: &mut Vec<DxfError>) -> Vec<DxfPart> {
     let (outer, inner): (Vec<Read>, Vec<Read>) = contours.into_iter().partition(|c| c.outside);
     let (flat, area) = flat_areas(outer.iter().map(|c| &c.contour));
     let count = outer.len();
-    let mut parts: Vec<Part> = outer
+    let mut parts: Vec<DxfPart> = outer
         .into_iter()
         .enumerate()
-        .map(|(k, c)| Part {
+        .map(|(k, c)| DxfPart {
             id: part_id(name, k, count),
             outer: c.contour,
             holes: Vec::new(),
+            etch: Vec::new(),
         })
         .collect();
     for h in inner {
         let probe = h.contour.vertices[0];
         match smallest_holding(&flat, &area, [probe.x, probe.y]) {
             Some(k) => parts[k].holes.push(h.contour),
-            None => rejected.push(NestError::BadPart {
+            None => rejected.push(DxfError::BadPart {
                 part: format!(
                     "{name} (inside contour at ({:.3}, {:.3}))",
                     probe.x, probe.y
@@ -417,7 +418,7 @@ fn by_layer(contours: Vec<Read>, name: &str, rejected: &mut Vec<NestError>) -> V
     parts
 }
 
-fn group(contours: Vec<Contour>, name: &str) -> Vec<Part> {
+fn group(contours: Vec<Contour>, name: &str) -> Vec<DxfPart> {
     let (flat, area) = flat_areas(contours.iter());
     let mut idx: Vec<usize> = (0..contours.len()).collect();
     idx.sort_by(|&a, &b| area[b].total_cmp(&area[a]));
@@ -444,7 +445,7 @@ fn group(contours: Vec<Contour>, name: &str) -> Vec<Part> {
     outers
         .iter()
         .enumerate()
-        .map(|(k, &o)| Part {
+        .map(|(k, &o)| DxfPart {
             id: part_id(name, k, outers.len()),
             outer: contours[o].clone(),
             holes: idx
@@ -452,6 +453,7 @@ fn group(contours: Vec<Contour>, name: &str) -> Vec<Part> {
                 .filter(|&&h| parent[h] == Some(o))
                 .map(|&h| contours[h].clone())
                 .collect(),
+            etch: Vec::new(),
         })
         .collect()
 }

@@ -1,26 +1,14 @@
-//! DXF ASCII R2000 (AC1015) writer shared by the strip drawings and the nested sheets:
-//! `$INSUNITS` = 4 (mm), one closed LWPOLYLINE with bulges per contour (nominal shape; the
-//! CAM applies kerf compensation, lead-ins and cut order), single-stroke etching, and an
-//! INFO layer that is never cut.
-//!
-//! Layers: `OUTSIDE` (part outlines), `INSIDE` (slots), `ETCH` (labels, fold marks, as
-//! open LWPOLYLINEs), `INFO` (nominal flat tiles, pins, titles, sheet outline, pierce
-//! points; not plotted).
+//! The DXF writer: ASCII R2000 (AC1015), `$INSUNITS` = 4 (mm), a complete skeleton
+//! (HEADER, CLASSES, TABLES, BLOCKS, ENTITIES, OBJECTS with handles and owners, so that
+//! ezdxf's auditor has nothing to fix), the shop layers, and entities in the order they are
+//! added (a CAM cuts in file order unless told otherwise): closed LWPOLYLINEs with bulges
+//! (arcs stay arcs), open LWPOLYLINEs, POINTs and TEXT.
 
 use std::fmt::Write;
 
-use sv_strips::{FlatStrip, StripProfile};
+use sv_geom::Contour;
 
-use crate::font::text_strokes;
-
-/// Layer of the part outline.
-pub const LAYER_OUTSIDE: &str = "OUTSIDE";
-/// Layer of the inside cuts.
-pub const LAYER_INSIDE: &str = "INSIDE";
-/// Layer of etched labels and fold marks.
-pub const LAYER_ETCH: &str = "ETCH";
-/// Layer of information that is never cut.
-pub const LAYER_INFO: &str = "INFO";
+use crate::{LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
 
 /// Group-code writer with a handle counter.
 struct Out {
@@ -99,13 +87,28 @@ fn record_head(o: &mut Out, kind: &str, owner: &str, subclass: &str) -> String {
 /// The ENTITIES of one drawing, written in the order they are added (the CAM cuts in
 /// file order unless told otherwise), then wrapped in a complete R2000 file by [`finish`].
 ///
+/// ```
+/// use sv_dxf::{Drawing, LAYER_OUTSIDE};
+/// let mut d = Drawing::new();
+/// d.contour(LAYER_OUTSIDE, &sv_geom::Contour::circle(0.0, 0.0, 10.0));
+/// let text = d.finish([-10.0, -10.0], [10.0, 10.0]);
+/// assert!(text.contains("AC1015") && text.ends_with("EOF\n"));
+/// ```
+///
 /// [`finish`]: Drawing::finish
-pub(crate) struct Drawing {
+pub struct Drawing {
     body: Out,
 }
 
+impl Default for Drawing {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl Drawing {
-    pub(crate) fn new() -> Self {
+    /// An empty drawing.
+    pub fn new() -> Self {
         Self {
             body: Out {
                 s: String::new(),
@@ -126,7 +129,12 @@ impl Drawing {
     }
 
     /// An LWPOLYLINE through `points` (`[x, y, bulge of the segment leaving the point]`).
-    pub(crate) fn polyline(&mut self, layer: &str, points: &[[f64; 3]], closed: bool) {
+    fn polyline(
+        &mut self,
+        layer: &str,
+        points: impl ExactSizeIterator<Item = [f64; 3]>,
+        closed: bool,
+    ) {
         self.entity("LWPOLYLINE", layer, "AcDbPolyline");
         let o = &mut self.body;
         o.pair(90, points.len());
@@ -141,27 +149,24 @@ impl Drawing {
         }
     }
 
+    /// A closed LWPOLYLINE with bulges: the contour as it is (same vertices, same
+    /// direction; arcs stay arcs).
+    pub fn contour(&mut self, layer: &str, contour: &Contour) {
+        self.polyline(layer, contour.vertices.iter().map(|&v| v.into()), true);
+    }
+
     /// An open polyline of straight segments.
-    pub(crate) fn open_line(&mut self, layer: &str, pts: &[[f64; 2]]) {
-        let v: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], 0.0]).collect();
-        self.polyline(layer, &v, false);
+    pub fn open_line(&mut self, layer: &str, pts: &[[f64; 2]]) {
+        self.polyline(layer, pts.iter().map(|p| [p[0], p[1], 0.0]), false);
     }
 
     /// A closed polygon of straight segments.
-    pub(crate) fn polygon(&mut self, layer: &str, pts: &[[f64; 2]]) {
-        let v: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], 0.0]).collect();
-        self.polyline(layer, &v, true);
-    }
-
-    /// Etched single-stroke text centred on `at`.
-    pub(crate) fn strokes(&mut self, layer: &str, text: &str, at: [f64; 2], angle: f64, h: f64) {
-        for s in text_strokes(text, at, angle, h) {
-            self.open_line(layer, &s);
-        }
+    pub fn polygon(&mut self, layer: &str, pts: &[[f64; 2]]) {
+        self.polyline(layer, pts.iter().map(|p| [p[0], p[1], 0.0]), true);
     }
 
     /// A TEXT entity (style Standard) with its baseline starting at `at`, for people.
-    pub(crate) fn text(&mut self, layer: &str, text: &str, at: [f64; 2], height: f64) {
+    pub fn text(&mut self, layer: &str, text: &str, at: [f64; 2], height: f64) {
         self.entity("TEXT", layer, "AcDbText");
         let o = &mut self.body;
         o.real(10, at[0]);
@@ -174,7 +179,7 @@ impl Drawing {
     }
 
     /// A POINT entity.
-    pub(crate) fn point(&mut self, layer: &str, at: [f64; 2]) {
+    pub fn point(&mut self, layer: &str, at: [f64; 2]) {
         self.entity("POINT", layer, "AcDbPoint");
         let o = &mut self.body;
         o.real(10, at[0]);
@@ -183,7 +188,7 @@ impl Drawing {
     }
 
     /// The complete DXF file; `ext_min`/`ext_max` are the drawing extents (mm).
-    pub(crate) fn finish(self, ext_min: [f64; 2], ext_max: [f64; 2]) -> String {
+    pub fn finish(self, ext_min: [f64; 2], ext_max: [f64; 2]) -> String {
         let entities = self.body.s;
         let seed = self.body.next;
         let mut o = Out {
@@ -429,53 +434,4 @@ impl Drawing {
         o.pair(0, "EOF");
         o.s
     }
-}
-
-/// The DXF text of one profiled strip.
-pub fn strip_dxf(strip: &FlatStrip, profile: &StripProfile) -> String {
-    let mut d = Drawing::new();
-    d.polyline(LAYER_OUTSIDE, &profile.outline.0, true);
-    for c in &profile.cuts {
-        d.polyline(LAYER_INSIDE, &c.0, true);
-    }
-    for s in etch_strokes(profile) {
-        d.open_line(LAYER_ETCH, &s);
-    }
-    for t in &profile.tiles {
-        d.polygon(LAYER_INFO, t);
-    }
-    for pin in &strip.pins {
-        let (x, y, r) = (pin.point.x, pin.point.y, 3.0);
-        d.open_line(LAYER_INFO, &[[x - r, y], [x + r, y]]);
-        d.open_line(LAYER_INFO, &[[x, y - r], [x, y + r]]);
-    }
-    let title = format!("{} {:.0}X{:.0}", strip.id, strip.size[0], strip.size[1]);
-    d.strokes(LAYER_INFO, &title, [strip.size[0] / 2.0, -30.0], 0.0, 15.0);
-    let (ext_min, ext_max) = extents(profile);
-    d.finish(ext_min, ext_max)
-}
-
-/// What a strip etches (labels and fold marks), as open polylines in the strip's frame.
-pub fn etch_strokes(profile: &StripProfile) -> Vec<Vec<[f64; 2]>> {
-    let mut out: Vec<Vec<[f64; 2]>> = profile
-        .labels
-        .iter()
-        .flat_map(|l| text_strokes(&l.text, l.at, l.angle, l.height))
-        .collect();
-    out.extend(profile.fold_marks.iter().map(|f| f.to_vec()));
-    out
-}
-
-fn extents(p: &StripProfile) -> ([f64; 2], [f64; 2]) {
-    let mut a = [f64::MAX, f64::MAX];
-    let mut b = [f64::MIN, f64::MIN];
-    for v in &p.outline.0 {
-        a = [a[0].min(v[0]), a[1].min(v[1])];
-        b = [b[0].max(v[0]), b[1].max(v[1])];
-    }
-    if a[0] > b[0] {
-        return ([0.0, 0.0], [0.0, 0.0]);
-    }
-    // arcs may bulge past their vertices by at most the fillet; leave room for the title
-    ([a[0] - 10.0, a[1] - 50.0], [b[0] + 10.0, b[1] + 10.0])
 }
