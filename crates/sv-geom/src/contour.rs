@@ -169,7 +169,7 @@ impl Segment {
         let r = chord / (2.0 * (theta / 2.0).sin().abs());
         // centre: midpoint + normal * d, d signed
         let d = r * (theta / 2.0).cos() * theta.signum();
-        let (mx, my) = (ax + dx / 2.0, ay + dy / 2.0);
+        let (mx, my) = ((ax + self.end[0]) / 2.0, (ay + self.end[1]) / 2.0);
         let (nx, ny) = (-dy / chord, dx / chord);
         let (cx, cy) = (mx + nx * d, my + ny * d);
         let tol = tolerance.clamp(1e-6, r);
