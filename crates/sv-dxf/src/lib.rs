@@ -1,27 +1,32 @@
 //! The one home of the DXF format in Spin-Valence: reading plasma parts from DXF files
-//! ([`parse_parts`]) and writing strips and sheets as DXF ([`Drawing`]). Pure: readers take
-//! text, writers return `String`; the caller touches the file system.
+//! written by any CAD program ([`read_dxf`]) and writing strips and sheets as DXF
+//! ([`Drawing`]). Pure: the reader takes bytes, the writer returns `String`; the caller
+//! touches the file system. `docs/dxf.md` has the rules and conventions.
 //!
 //! The shop layers, read and written alike: [`LAYER_OUTSIDE`] (part outlines),
 //! [`LAYER_INSIDE`] (inside cuts), [`LAYER_ETCH`] (etched marks, open polylines),
 //! [`LAYER_INFO`] (never cut: nominal tiles, titles, sheet outline, pierce points).
 //!
 //! ```
-//! use sv_dxf::{parse_parts, Drawing, LAYER_INSIDE, LAYER_OUTSIDE};
+//! use sv_dxf::{read_dxf, Drawing, ReadOptions, LAYER_INSIDE, LAYER_OUTSIDE};
 //! use sv_geom::Contour;
 //! let mut d = Drawing::new();
 //! d.contour(LAYER_INSIDE, &Contour::circle(50.0, 25.0, 5.0));
 //! d.contour(LAYER_OUTSIDE, &Contour::polygon(&[[0.0, 0.0], [100.0, 0.0], [100.0, 50.0], [0.0, 50.0]]));
-//! let text = d.finish([-10.0, -10.0], [110.0, 60.0]);
-//! let read = parse_parts(&text, "plate").unwrap();
+//! let text = d.finish();
+//! let read = read_dxf(text.as_bytes(), "plate", &ReadOptions::default()).unwrap();
 //! assert_eq!(read.parts.len(), 1);
 //! assert_eq!(read.parts[0].holes.len(), 1);
+//! assert!((read.parts[0].outer.area() - 5000.0).abs() < 1e-9);
 //! ```
 
-mod read;
+mod reader;
 mod write;
 
-pub use read::{parse_parts, DxfPart, DxfParts, DEFAULT_CHAIN_TOLERANCE};
+pub use reader::{
+    parse_parts, read_dxf, DxfPart, DxfParts, EntityRef, LayerRole, LayerRule, LayerRules, Note,
+    ReadOptions, Units, DEFAULT_ARC_TOLERANCE, DEFAULT_JOIN_TOLERANCE,
+};
 pub use write::Drawing;
 
 /// Layer of the part outlines.
@@ -36,20 +41,20 @@ pub const LAYER_INFO: &str = "INFO";
 /// Errors of the DXF reader; one line each, naming the file and the place.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DxfError {
-    /// A contour that cannot be a part (open, zero size, ...), named by file and place.
+    /// A contour that cannot be a part (open, zero size, ...), named by file and entities.
     #[error("part {part}: {reason}")]
     BadPart {
-        /// file name and where in it
+        /// file name and the entities
         part: String,
         /// what is wrong
         reason: String,
     },
-    /// Unreadable or invalid DXF.
+    /// A file that cannot be read (not DXF, unknown units, bad options).
     #[error("{file}: {message}")]
     Dxf {
         /// file name
         file: String,
-        /// what is wrong (with line number when known)
+        /// what is wrong
         message: String,
     },
 }

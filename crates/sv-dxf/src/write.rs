@@ -91,13 +91,18 @@ fn record_head(o: &mut Out, kind: &str, owner: &str, subclass: &str) -> String {
 /// use sv_dxf::{Drawing, LAYER_OUTSIDE};
 /// let mut d = Drawing::new();
 /// d.contour(LAYER_OUTSIDE, &sv_geom::Contour::circle(0.0, 0.0, 10.0));
-/// let text = d.finish([-10.0, -10.0], [10.0, 10.0]);
+/// let text = d.finish();
 /// assert!(text.contains("AC1015") && text.ends_with("EOF\n"));
+/// // the header extents hold the circle
+/// assert!(text.contains("$EXTMIN\n 10\n-10.000000000\n 20\n-10.000000000"));
 /// ```
 ///
 /// [`finish`]: Drawing::finish
 pub struct Drawing {
     body: Out,
+    /// the extents of everything drawn so far
+    lo: [f64; 2],
+    hi: [f64; 2],
 }
 
 impl Default for Drawing {
@@ -114,6 +119,15 @@ impl Drawing {
                 s: String::new(),
                 next: FIRST_FREE,
             },
+            lo: [f64::INFINITY; 2],
+            hi: [f64::NEG_INFINITY; 2],
+        }
+    }
+
+    fn grow(&mut self, p: [f64; 2]) {
+        for k in 0..2 {
+            self.lo[k] = self.lo[k].min(p[k]);
+            self.hi[k] = self.hi[k].max(p[k]);
         }
     }
 
@@ -152,21 +166,40 @@ impl Drawing {
     /// A closed LWPOLYLINE with bulges: the contour as it is (same vertices, same
     /// direction; arcs stay arcs).
     pub fn contour(&mut self, layer: &str, contour: &Contour) {
+        if let Some((lo, hi)) = contour.bounds() {
+            self.grow(lo);
+            self.grow(hi);
+        }
         self.polyline(layer, contour.vertices.iter().map(|&v| v.into()), true);
     }
 
     /// An open polyline of straight segments.
     pub fn open_line(&mut self, layer: &str, pts: &[[f64; 2]]) {
+        pts.iter().for_each(|&p| self.grow(p));
         self.polyline(layer, pts.iter().map(|p| [p[0], p[1], 0.0]), false);
     }
 
     /// A closed polygon of straight segments.
     pub fn polygon(&mut self, layer: &str, pts: &[[f64; 2]]) {
+        pts.iter().for_each(|&p| self.grow(p));
         self.polyline(layer, pts.iter().map(|p| [p[0], p[1], 0.0]), true);
+    }
+
+    /// The box a TEXT of `height` at `at` may cover in a CAD program's font: one cap
+    /// height per character wide (wider than any usual font), a third below the baseline.
+    pub fn text_box(text: &str, at: [f64; 2], height: f64) -> ([f64; 2], [f64; 2]) {
+        let width = height * text.chars().count() as f64;
+        (
+            [at[0], at[1] - height / 3.0],
+            [at[0] + width, at[1] + 1.25 * height],
+        )
     }
 
     /// A TEXT entity (style Standard) with its baseline starting at `at`, for people.
     pub fn text(&mut self, layer: &str, text: &str, at: [f64; 2], height: f64) {
+        let (lo, hi) = Self::text_box(text, at, height);
+        self.grow(lo);
+        self.grow(hi);
         self.entity("TEXT", layer, "AcDbText");
         let o = &mut self.body;
         o.real(10, at[0]);
@@ -180,6 +213,7 @@ impl Drawing {
 
     /// A POINT entity.
     pub fn point(&mut self, layer: &str, at: [f64; 2]) {
+        self.grow(at);
         self.entity("POINT", layer, "AcDbPoint");
         let o = &mut self.body;
         o.real(10, at[0]);
@@ -187,8 +221,13 @@ impl Drawing {
         o.real(30, 0.0);
     }
 
-    /// The complete DXF file; `ext_min`/`ext_max` are the drawing extents (mm).
-    pub fn finish(self, ext_min: [f64; 2], ext_max: [f64; 2]) -> String {
+    /// The complete DXF file, its header extents holding everything drawn.
+    pub fn finish(self) -> String {
+        let (ext_min, ext_max) = if self.lo[0] <= self.hi[0] {
+            (self.lo, self.hi)
+        } else {
+            ([0.0; 2], [0.0; 2])
+        };
         let entities = self.body.s;
         let seed = self.body.next;
         let mut o = Out {

@@ -1,7 +1,9 @@
-//! The DXF reader on hand-written files: LWPOLYLINE with bulges, CIRCLE holes, LINE/ARC
-//! chains, POLYLINE/VERTEX, the shop layers and what is never cut.
+//! The DXF reader on small hand-written files: LWPOLYLINE with bulges, CIRCLE holes,
+//! LINE/ARC chains, POLYLINE/VERTEX, the shop layers and what is never cut, units, the join
+//! tolerance and islands. Files written by other CAD libraries are the end-to-end tests'
+//! (`tests/e2e/dxf_inputs.rs`, written by ezdxf).
 
-use sv_dxf::parse_parts;
+use sv_dxf::{parse_parts, read_dxf, ReadOptions, Units};
 use sv_geom::planar::polygon_area;
 
 const DXF_LW: &str = "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n8\nOUTSIDE\n90\n4\n70\n1\n10\n0\n20\n0\n42\n0\n10\n100\n20\n0\n42\n1\n10\n100\n20\n50\n42\n0\n10\n0\n20\n50\n0\nCIRCLE\n8\nINSIDE\n10\n40\n20\n25\n40\n10\n0\nLWPOLYLINE\n70\n0\n10\n500\n20\n500\n10\n600\n20\n500\n0\nENDSEC\n0\nEOF\n";
@@ -111,4 +113,69 @@ fn dxf_shop_layers_outlines_holes_and_what_is_not_cut() {
         .replace("\n8\nOUTSIDE\n", "\n8\n0\n");
     let read = parse_parts(&generic, "sheet").unwrap();
     assert_eq!(read.parts.len(), 4, "the stray slot is a part of its own");
+}
+
+/// A file with a header setting `$INSUNITS` and `entities`.
+fn with_units(code: i32, entities: &str) -> String {
+    format!("0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n{code}\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n{entities}0\nENDSEC\n0\nEOF\n")
+}
+
+#[test]
+fn units_scale_to_mm_and_unknown_units_are_refused() {
+    let square = lw("0", &square(0.0, 0.0, 2.0));
+    let inches = read_dxf(
+        with_units(1, &square).as_bytes(),
+        "in",
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    assert!((inches.parts[0].outer.area() - 4.0 * 25.4 * 25.4).abs() < 1e-6);
+    assert!(inches
+        .notes
+        .iter()
+        .any(|n| n.what.contains("scaled by 25.4")));
+    // --units overrides the file
+    let options = ReadOptions {
+        units: Some("m".parse::<Units>().unwrap()),
+        ..ReadOptions::default()
+    };
+    let metres = read_dxf(with_units(1, &square).as_bytes(), "m", &options).unwrap();
+    assert!((metres.parts[0].outer.area() - 4e6).abs() < 1e-3);
+    let err = read_dxf(
+        with_units(99, &square).as_bytes(),
+        "odd",
+        &ReadOptions::default(),
+    )
+    .unwrap_err();
+    assert!(err.to_string().starts_with("odd: $INSUNITS 99"), "{err}");
+    assert!(read_dxf(with_units(99, &square).as_bytes(), "odd", &options).is_ok());
+}
+
+#[test]
+fn the_join_tolerance_is_settable_and_open_contours_say_how_far_apart() {
+    // a 100 x 50 rectangle of lines with a 0.1 mm gap at one corner
+    let lines = "0\nLINE\n10\n0\n20\n0\n11\n100\n21\n0\n0\nLINE\n10\n100\n20\n0\n11\n100\n21\n50\n\
+0\nLINE\n10\n100\n20\n50\n11\n0\n21\n50\n0\nLINE\n10\n0\n20\n50\n11\n0\n21\n0.1\n";
+    let text = with_units(4, lines);
+    let read = read_dxf(text.as_bytes(), "gap", &ReadOptions::default()).unwrap();
+    assert!(read.parts.is_empty());
+    let why = read.rejected[0].to_string();
+    assert!(
+        why.contains("0.100 mm apart") && why.contains("gap"),
+        "{why}"
+    );
+    let options = ReadOptions {
+        join_tolerance: 0.2,
+        ..ReadOptions::default()
+    };
+    let read = read_dxf(text.as_bytes(), "gap", &options).unwrap();
+    assert_eq!(read.parts.len(), 1);
+    assert!((read.parts[0].outer.area() - 5000.0).abs() < 10.0);
+    assert!(
+        read.notes
+            .iter()
+            .any(|n| n.what.contains("gap of 0.1000 mm closed")),
+        "{:?}",
+        read.notes
+    );
 }

@@ -30,7 +30,10 @@ mod svg;
 
 pub use font::{has_glyph, text_strokes, text_width};
 pub use preview::sheet_svg;
-pub use sheet::{sheet_dxf, sheet_file_stem, strip_sheet_part, SheetCaption, SheetPart};
+pub use sheet::{
+    sheet_dxf, sheet_file_stem, strip_sheet_part, CutDirection, EtchOrder, SheetCaption, SheetPart,
+    ShopConvention,
+};
 pub use strip::{etch_strokes, strip_dxf};
 pub use sv_dxf::{LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
 pub use svg::{path_data as svg_path_data, strip_svg};

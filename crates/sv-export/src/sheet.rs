@@ -9,6 +9,7 @@
 
 use sv_dxf::{Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
 use sv_geom::planar::{bbox, boundary_distance, point_in_polygon, polygon_area};
+use sv_geom::Contour;
 use sv_nest::{NestReport, Part};
 use sv_strips::{FlatStrip, StripProfile};
 
@@ -64,6 +65,55 @@ pub fn sheet_file_stem(index: usize, width: f64, height: f64, thickness: Option<
     stem
 }
 
+/// Which way cut contours run (the CAM follows the direction written).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CutDirection {
+    /// Outside contours clockwise, inside contours counter-clockwise: the usual plasma
+    /// convention (with a right-hand swirl the good edge of the part is on the right).
+    #[default]
+    OutsideClockwise,
+    /// Outside contours counter-clockwise, inside contours clockwise.
+    OutsideCounterClockwise,
+}
+
+impl CutDirection {
+    /// Whether outside contours run counter-clockwise.
+    pub fn outside_ccw(self) -> bool {
+        self == CutDirection::OutsideCounterClockwise
+    }
+}
+
+/// Where the etching goes in the file (a CAM that follows file order etches in it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EtchOrder {
+    /// All etching before the first cut, so nothing is etched on a part already cut free.
+    #[default]
+    BeforeCuts,
+    /// All etching after the last cut.
+    AfterCuts,
+}
+
+/// The shop conventions of a sheet or strip DXF (`docs/dxf.md`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ShopConvention {
+    /// Which way contours run.
+    pub direction: CutDirection,
+    /// Where the etching goes.
+    pub etch: EtchOrder,
+}
+
+impl ShopConvention {
+    /// An outline in this convention (same first vertex).
+    pub fn outside(&self, c: &Contour) -> Contour {
+        c.oriented(self.direction.outside_ccw())
+    }
+
+    /// A hole in this convention (same first vertex).
+    pub fn inside(&self, c: &Contour) -> Contour {
+        c.oriented(!self.direction.outside_ccw())
+    }
+}
+
 /// What the sheet title says besides the sheet number and size.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SheetCaption {
@@ -94,6 +144,13 @@ impl Placed {
             lo,
             hi,
         }
+    }
+
+    /// Distance from `p` to this part's box (0 inside it): no point of the part is nearer.
+    fn box_distance(&self, p: [f64; 2]) -> f64 {
+        let dx = (self.lo[0] - p[0]).max(p[0] - self.hi[0]).max(0.0);
+        let dy = (self.lo[1] - p[1]).max(p[1] - self.hi[1]).max(0.0);
+        dx.hypot(dy)
     }
 
     /// Whether `p` is on this part's material (inside the outline, outside every hole),
@@ -208,17 +265,19 @@ fn outside_pierce(parts: &[Placed], k: usize, offset: f64, sheet: [f64; 2]) -> [
         if point_in_polygon(p, &me.outer) {
             continue;
         }
-        // clearance: distance to the nearest material of any part (own outline included)
-        let clear = parts
-            .iter()
-            .map(|q| {
-                if q.covers(p, 0.0) {
-                    0.0
-                } else {
-                    boundary_distance(p, &q.outer)
-                }
-            })
-            .fold(f64::INFINITY, f64::min);
+        // clearance: distance to the nearest material of any part (own outline included);
+        // a part whose box is farther than the nearest so far cannot be nearer
+        let mut clear = f64::INFINITY;
+        for q in parts {
+            if q.box_distance(p) >= clear {
+                continue;
+            }
+            clear = clear.min(if q.covers(p, 0.0) {
+                0.0
+            } else {
+                boundary_distance(p, &q.outer)
+            });
+        }
         if clear >= 0.9 * offset {
             return p;
         }
@@ -229,14 +288,16 @@ fn outside_pierce(parts: &[Placed], k: usize, offset: f64, sheet: [f64; 2]) -> [
     best.0
 }
 
-/// The DXF text of sheet `index` of `report`. `parts` holds every nested part (looked up
-/// by id). An outline's pierce point sits half the spacing outside it (midway to the
-/// nearest neighbour); a hole's at the point of the hole farthest from its edge.
+/// The DXF text of sheet `index` of `report` in `convention`. `parts` holds every nested
+/// part (looked up by id). An outline's pierce point sits half the spacing outside it
+/// (midway to the nearest neighbour); a hole's at the point of the hole farthest from its
+/// edge.
 pub fn sheet_dxf(
     report: &NestReport,
     index: usize,
     parts: &[SheetPart],
     caption: &SheetCaption,
+    convention: &ShopConvention,
 ) -> Result<String, String> {
     let sheet = report.sheets.get(index).ok_or_else(|| {
         format!(
@@ -276,24 +337,39 @@ pub fn sheet_dxf(
     let offset = (report.sheet.spacing / 2.0).max(0.5);
     let mut d = Drawing::new();
     d.polygon(LAYER_INFO, &[[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]]);
+    let etch_all = |d: &mut Drawing| {
+        for lines in &etch {
+            for l in lines {
+                d.open_line(LAYER_ETCH, l);
+            }
+        }
+    };
+    if convention.etch == EtchOrder::BeforeCuts {
+        etch_all(&mut d);
+    }
     for (k, p) in placed.iter().enumerate() {
         for (hole, flat) in p.part.holes.iter().zip(&p.holes) {
-            d.contour(LAYER_INSIDE, hole);
+            d.contour(LAYER_INSIDE, &convention.inside(hole));
             d.point(LAYER_INFO, deepest_point(flat).0);
         }
-        d.contour(LAYER_OUTSIDE, &p.part.outer);
+        d.contour(LAYER_OUTSIDE, &convention.outside(&p.part.outer));
         d.point(LAYER_INFO, outside_pierce(&placed, k, offset, [w, h]));
-        for l in &etch[k] {
-            d.open_line(LAYER_ETCH, l);
-        }
-        let size = (p.hi[1] - p.lo[1]).min(p.hi[0] - p.lo[0]);
-        let th = (size / 3.0).clamp(5.0, 40.0);
+        // the label inside the part's box: a third of its smaller side, narrower for a
+        // long id on a small part
         let label = &p.part.id;
+        let chars = label.chars().count().max(1) as f64;
+        let size = (p.hi[1] - p.lo[1]).min(p.hi[0] - p.lo[0]);
+        let th = (size / 3.0)
+            .min(0.8 * (p.hi[0] - p.lo[0]) / chars)
+            .clamp(1.0, 40.0);
         let at = [
-            (p.lo[0] + p.hi[0]) / 2.0 - 0.3 * th * label.chars().count() as f64,
+            (p.lo[0] + p.hi[0]) / 2.0 - 0.3 * th * chars,
             (p.lo[1] + p.hi[1]) / 2.0 - th / 2.0,
         ];
         d.text(LAYER_INFO, label, at, th);
+    }
+    if convention.etch == EtchOrder::AfterCuts {
+        etch_all(&mut d);
     }
     if let Some(o) = report.offcut.as_ref().filter(|o| o.sheet == index) {
         let (x0, y0, x1, y1) = (o.x, o.y, o.x + o.width, o.y + o.height);
@@ -326,7 +402,7 @@ pub fn sheet_dxf(
         title.push_str(&format!("  {}", caption.generator));
     }
     d.text(LAYER_INFO, &title, [0.0, -60.0], 30.0);
-    Ok(d.finish([-10.0, -80.0], [w + 10.0, h + 10.0]))
+    Ok(d.finish())
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@ use sv_dxf::{Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
 use sv_strips::{FlatStrip, StripProfile};
 
 use crate::font::text_strokes;
+use crate::ShopConvention;
 
 /// Etched single-stroke text centred on `at` (baseline along `angle`, cap height `h`).
 pub(crate) fn strokes(d: &mut Drawing, layer: &str, text: &str, at: [f64; 2], angle: f64, h: f64) {
@@ -13,16 +14,18 @@ pub(crate) fn strokes(d: &mut Drawing, layer: &str, text: &str, at: [f64; 2], an
     }
 }
 
-/// The DXF text of one profiled strip.
+/// The DXF text of one profiled strip in the default shop convention ([`ShopConvention`]:
+/// etching first, then the slots counter-clockwise, then the outline clockwise).
 pub fn strip_dxf(strip: &FlatStrip, profile: &StripProfile) -> String {
+    let convention = ShopConvention::default();
     let mut d = Drawing::new();
-    d.contour(LAYER_OUTSIDE, &profile.outline);
-    for c in &profile.cuts {
-        d.contour(LAYER_INSIDE, c);
-    }
     for s in etch_strokes(profile) {
         d.open_line(LAYER_ETCH, &s);
     }
+    for c in &profile.cuts {
+        d.contour(LAYER_INSIDE, &convention.inside(c));
+    }
+    d.contour(LAYER_OUTSIDE, &convention.outside(&profile.outline));
     for t in &profile.tiles {
         d.polygon(LAYER_INFO, t);
     }
@@ -40,8 +43,7 @@ pub fn strip_dxf(strip: &FlatStrip, profile: &StripProfile) -> String {
         0.0,
         15.0,
     );
-    let (ext_min, ext_max) = extents(profile);
-    d.finish(ext_min, ext_max)
+    d.finish()
 }
 
 /// What a strip etches (labels and fold marks), as open polylines in the strip's frame.
@@ -53,18 +55,4 @@ pub fn etch_strokes(profile: &StripProfile) -> Vec<Vec<[f64; 2]>> {
         .collect();
     out.extend(profile.fold_marks.iter().map(|f| f.to_vec()));
     out
-}
-
-fn extents(p: &StripProfile) -> ([f64; 2], [f64; 2]) {
-    let mut a = [f64::MAX, f64::MAX];
-    let mut b = [f64::MIN, f64::MIN];
-    for v in &p.outline.vertices {
-        a = [a[0].min(v.x), a[1].min(v.y)];
-        b = [b[0].max(v.x), b[1].max(v.y)];
-    }
-    if a[0] > b[0] {
-        return ([0.0, 0.0], [0.0, 0.0]);
-    }
-    // arcs may bulge past their vertices by at most the fillet; leave room for the title
-    ([a[0] - 10.0, a[1] - 50.0], [b[0] + 10.0, b[1] + 10.0])
 }

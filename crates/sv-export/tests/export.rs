@@ -109,7 +109,7 @@ fn every_sheet_dxf_passes_the_ezdxf_audit_and_reads_back_as_its_parts() {
     let mut files = Vec::new();
     let mut seen = Vec::new();
     for (i, sheet) in report.sheets.iter().enumerate() {
-        let dxf = sv_export::sheet_dxf(&report, i, &parts, &caption).unwrap();
+        let dxf = sv_export::sheet_dxf(&report, i, &parts, &caption, &Default::default()).unwrap();
         let back = sv_dxf::parse_parts(&dxf, "sheet").unwrap();
         assert!(back.rejected.is_empty(), "{:?}", back.rejected);
         assert_eq!(back.parts.len(), sheet.placements.len());
