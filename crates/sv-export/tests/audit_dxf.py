@@ -15,7 +15,7 @@ import ezdxf.path
 from ezdxf import bbox
 
 
-def check(path, sheets):
+def check(path, sheets, strips_etched=True):
     problems = []
     doc = ezdxf.readfile(path)
     auditor = doc.audit()
@@ -69,21 +69,24 @@ def check(path, sheets):
         tol = 1e-6
         if box.extmin.x < lo[0] - tol or box.extmin.y < lo[1] - tol or box.extmax.x > hi[0] + tol or box.extmax.y > hi[1] + tol:
             problems.append(f"entities {box.extmin} .. {box.extmax} outside the header extents {lo} .. {hi}")
-    if len(msp.query('LWPOLYLINE[layer=="ETCH"]')) == 0:
-        problems.append("nothing to etch")
-    if not any(b != 0 for e in inside for (_, _, _, _, b) in e.get_points()):
-        problems.append("no arcs in the cuts")
+    if strips_etched:
+        if len(msp.query('LWPOLYLINE[layer=="ETCH"]')) == 0:
+            problems.append("nothing to etch")
+        if not any(b != 0 for e in inside for (_, _, _, _, b) in e.get_points()):
+            problems.append("no arcs in the cuts")
     return problems
 
 
 def main():
     failed = False
     args = sys.argv[1:]
-    sheets = bool(args) and args[0] == "--sheets"
+    # --foreign-sheets: sheets of any parts (not our strips: maybe nothing etched, no arcs)
+    foreign = bool(args) and args[0] == "--foreign-sheets"
+    sheets = foreign or (bool(args) and args[0] == "--sheets")
     if sheets:
         args = args[1:]
     for path in args:
-        problems = check(path, sheets)
+        problems = check(path, sheets, not foreign)
         for p in problems:
             print(f"{path}: {p}")
         failed |= bool(problems)

@@ -184,6 +184,37 @@ fn prescan(bytes: &[u8]) -> (Option<i32>, bool) {
     (units, handles)
 }
 
+/// ASCII DXF text without the tables other than LAYER and LTYPE; `None` when it is not
+/// ASCII DXF or has no such tables to drop.
+fn only_layer_tables(bytes: &[u8]) -> Option<String> {
+    let text = std::str::from_utf8(bytes).ok()?;
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    let mut dropped = false;
+    while i + 1 < lines.len() {
+        let (code, value) = (lines[i].trim(), lines[i + 1].trim());
+        let name = lines.get(i + 3).map_or("", |l| l.trim());
+        if code == "0" && value == "TABLE" && !matches!(name, "LAYER" | "LTYPE") {
+            // skip to the end of this table
+            while i + 1 < lines.len()
+                && !(lines[i].trim() == "0" && lines[i + 1].trim() == "ENDTAB")
+            {
+                i += 2;
+            }
+            i += 2;
+            dropped = true;
+            continue;
+        }
+        out.push_str(lines[i]);
+        out.push('\n');
+        out.push_str(lines[i + 1]);
+        out.push('\n');
+        i += 2;
+    }
+    dropped.then_some(out)
+}
+
 /// Reads a DXF file's bytes (ASCII or binary); `name` names the file in messages and
 /// part ids. A file that cannot be parsed, or whose units are unknown, is an error; a
 /// file that parses gives its parts, with what it could not use in `rejected` and
@@ -202,9 +233,25 @@ pub fn read_dxf(bytes: &[u8], name: &str, options: &ReadOptions) -> Result<DxfPa
         }
     }
     let (code, handles) = prescan(bytes);
-    let drawing = dxf::Drawing::load(&mut std::io::Cursor::new(bytes))
-        .map_err(|e| fail(format!("not a readable DXF file: {e}")))?;
     let mut notes: Vec<Note> = Vec::new();
+    let drawing = match dxf::Drawing::load(&mut std::io::Cursor::new(bytes)) {
+        Ok(d) => d,
+        // the dxf crate fails on some tables the reader does not need (an R12 DIMSTYLE
+        // naming its arrow blocks under group code 5, as ezdxf writes it): read the file
+        // again with only the LAYER and LTYPE tables
+        Err(e) => {
+            let why = format!("not a readable DXF file: {e}");
+            let trimmed = only_layer_tables(bytes).ok_or_else(|| fail(why.clone()))?;
+            let d = dxf::Drawing::load(&mut std::io::Cursor::new(trimmed.as_bytes()))
+                .map_err(|_| fail(why))?;
+            notes.push(Note {
+                file: name.to_string(),
+                what: format!("the DXF parser failed on a table ({e}): read with the LAYER and LTYPE tables only"),
+                entities: Vec::new(),
+            });
+            d
+        }
+    };
     let file_note = |what: String| Note {
         file: name.to_string(),
         what,

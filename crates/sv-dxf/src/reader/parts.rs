@@ -95,8 +95,12 @@ pub(crate) fn classify(
     cands.retain(|c| {
         let keep = c.area > 1e-9 && c.contour.vertices.len() >= 2;
         if !keep {
-            out.rejected
-                .push((c.srcs.clone(), "closed contour of zero area".into()));
+            let why = if c.contour.self_intersects() {
+                "self-intersecting closed contour (its areas cancel)"
+            } else {
+                "closed contour of zero area"
+            };
+            out.rejected.push((c.srcs.clone(), why.into()));
         }
         keep
     });
