@@ -27,7 +27,8 @@
 
 use cavalier_contours::core::math::Vector2 as CVector2;
 use cavalier_contours::polyline::{
-    seg_arc_radius_and_center, seg_length, seg_midpoint, PlineCreation, PlineSource, PlineVertex, Polyline,
+    seg_arc_radius_and_center, seg_length, seg_midpoint, PlineCreation, PlineSource, PlineVertex,
+    Polyline,
 };
 use serde::{Deserialize, Serialize};
 
@@ -465,7 +466,9 @@ mod tests {
         let (t0, t1) = s.tangent_angles();
         assert!(near(t0, FRAC_PI_2, 1e-12) && near(t1, PI, 1e-12));
         let m = s.midpoint();
-        assert!(near(m[0], 5.0 * FRAC_PI_4.cos(), 1e-12) && near(m[1], 5.0 * FRAC_PI_4.sin(), 1e-12));
+        assert!(
+            near(m[0], 5.0 * FRAC_PI_4.cos(), 1e-12) && near(m[1], 5.0 * FRAC_PI_4.sin(), 1e-12)
+        );
         let back = s.reversed();
         assert!(near(back.length(), s.length(), 1e-12) && back.arc().unwrap().1 == c);
         let line = Segment {
