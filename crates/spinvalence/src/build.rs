@@ -267,6 +267,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         &parts,
         &options.nest,
         Some(cfg.profile.thickness),
+        &sv_export::ShopConvention::default(),
         args.quiet,
     )?;
     if let Some(l) = nested.report.left_out.first() {

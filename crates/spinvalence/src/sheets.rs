@@ -3,7 +3,7 @@
 //! file) and SVG (the preview). Pure computation; the callers write the files atomically.
 
 use anyhow::{anyhow, Result};
-use sv_export::{SheetCaption, SheetPart};
+use sv_export::{SheetCaption, SheetPart, ShopConvention};
 use sv_nest::{NestOptions, NestReport, Part};
 
 use crate::solve::progress_bar;
@@ -19,12 +19,13 @@ pub struct NestStage {
     pub sheet_files: Vec<String>,
 }
 
-/// Nest `parts` with `options` and draw the sheets; `thickness` (mm) goes into the file
-/// names and titles when known.
+/// Nest `parts` with `options` and draw the sheets in `convention`; `thickness` (mm) goes
+/// into the file names and titles when known.
 pub fn run(
     parts: &[SheetPart],
     options: &NestOptions,
     thickness: Option<f64>,
+    convention: &ShopConvention,
     quiet: bool,
 ) -> Result<NestStage> {
     let plain: Vec<Part> = parts.iter().map(|p| p.part.clone()).collect();
@@ -48,9 +49,9 @@ pub fn run(
     let mut sheet_files = Vec::with_capacity(report.sheets.len());
     for (i, sheet) in report.sheets.iter().enumerate() {
         let stem = sv_export::sheet_file_stem(i, sheet.width, sheet.height, thickness);
-        let dxf = sv_export::sheet_dxf(&report, i, parts, &caption)
+        let dxf = sv_export::sheet_dxf(&report, i, parts, &caption, convention)
             .map_err(|e| anyhow!("nesting: {e}"))?;
-        let svg = sv_nest::svg::sheet_svg(&report, &plain, i, sv_nest::DEFAULT_FLATTEN_TOLERANCE);
+        let svg = sv_export::sheet_svg(&report, &plain, i);
         sheet_files.push(format!("sheets/{stem}.dxf"));
         drawings.push((format!("{stem}.dxf"), dxf));
         drawings.push((format!("{stem}.svg"), svg));
