@@ -4,10 +4,10 @@ CARGO ?= cargo
 
 export PROPTEST_RNG_SEED ?= 20261122
 
-.PHONY: test toolchain browser fmt-check clippy unit-tests bench bench-primary fixtures bench-stream
+.PHONY: test toolchain browser xr-deps fmt-check clippy unit-tests bench bench-primary fixtures bench-stream
 
 ## Everything CI checks: formatting, lints (warnings denied), unit, integration, e2e and doc tests.
-test: toolchain browser fmt-check clippy unit-tests
+test: toolchain browser xr-deps fmt-check clippy unit-tests
 
 ## Headless Chromium for the browser tests (the AR client, the build report), from Debian's
 ## packages when it is missing.
@@ -18,6 +18,19 @@ browser:
 		$$SUDO apt-get update -qq && \
 		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq chromium; \
 	fi
+
+## The emulated XR devices of the AR browser tests: Meta's Immersive Web Emulation Runtime
+## (npm iwer), exactly as crates/sv-stream/tests/xr/package-lock.json pins it (Node.js and
+## npm from Debian's packages when missing). Test-only: the binary never serves it.
+XR_DIR := crates/sv-stream/tests/xr
+xr-deps:
+	@if ! command -v npm >/dev/null 2>&1; then \
+		echo "installing nodejs and npm from Debian packages for the XR browser tests"; \
+		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+		$$SUDO apt-get update -qq && \
+		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq nodejs npm; \
+	fi
+	npm ci --prefix $(XR_DIR) --no-audit --no-fund --loglevel=error
 
 ## rustfmt and clippy, added through rustup when missing.
 toolchain:

@@ -19,6 +19,9 @@
 //   view.project(id)                  client {x, y} of the unit's hub centre, or null
 //   view.resetCamera()                look at the whole frame again
 //   view.renderer / view.scene / view.camera   for WebXR
+//   view.world                        the group holding the frame, ghosts and marker (model
+//                                     mm); an AR page places it with its matrix
+//   view.bounds / view.edge           the frame's bounding box and mean hub edge (mm)
 //   view.dispose()
 //
 // All units share one mesh per layer (hubs, primary tiles, edges, legs) with per-vertex
@@ -126,8 +129,12 @@ export function createFrameView(container, {
   // frame data, Z up, mm: one mesh per layer
   const e = Number.isFinite(expansion) && expansion > 0 ? expansion : 1;
   const tiles = units.map((u) => scaled(u.primary, e));
+  // everything in model coordinates hangs from `world`, so an AR page can place the frame
+  // (mm, Z up) in a metre, Y-up scene with one matrix while lights and overlays stay put
+  const world = new THREE.Group();
+  scene.add(world);
   const root = new THREE.Group();
-  scene.add(root);
+  world.add(root);
   const hubs = new THREE.Mesh(quadsGeometry(units.map((u) => u.hub)),
     new THREE.MeshStandardMaterial({
       vertexColors: true, side: THREE.DoubleSide, metalness: 0.2, roughness: 0.6,
@@ -183,7 +190,7 @@ export function createFrameView(container, {
   const highlightMat = new THREE.LineBasicMaterial({ color: highlight, depthTest: false });
   let highlighted = null;
   const ghostGroup = new THREE.Group();
-  scene.add(ghostGroup);
+  world.add(ghostGroup);
   const ghosts = new Map();
   const locals = new Map();
   const marker = new THREE.Group();
@@ -196,7 +203,7 @@ export function createFrameView(container, {
   arrow.cone.material.depthTest = false;
   arrow.renderOrder = 10;
   marker.add(dot, arrow);
-  scene.add(marker);
+  world.add(marker);
 
   function resolveColour(spec, id) {
     if (typeof spec === 'function') return spec(id);
@@ -283,6 +290,9 @@ export function createFrameView(container, {
     scene,
     camera,
     controls,
+    world,
+    edge,
+    bounds: box,
 
     setColours(spec) {
       paint(spec);

@@ -88,7 +88,10 @@ fn recv(ws: &mut tungstenite::WebSocket<TcpStream>) -> Value {
 #[test]
 fn serve_answers_hello_and_targets_and_serves_the_page() {
     let dir = solved();
-    let server = serve(&dir, &["--token", "op", "--position-tolerance", "3"]);
+    let server = serve(
+        &dir,
+        &["--token", "op-token-0123", "--position-tolerance", "3"],
+    );
 
     let tcp = TcpStream::connect(&server.addr).unwrap();
     tcp.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
@@ -104,7 +107,7 @@ fn serve_answers_hello_and_targets_and_serves_the_page() {
     assert_eq!(welcome["frame"]["units"], 12, "grid_small has 4 x 3 units");
     assert_eq!(welcome["tolerance"]["position_mm"], 3.0);
     ws.send(Message::text(
-        json!({"type": "hello", "token": "op", "client_id": "e2e"}).to_string(),
+        json!({"type": "hello", "token": "op-token-0123", "client_id": "e2e"}).to_string(),
     ))
     .unwrap();
     let ready = recv(&mut ws);
@@ -179,6 +182,10 @@ fn serve_bad_input_is_a_one_line_error() {
             vec!["--frame", "out/frame.json", "--angle-tolerance", "0"],
             "--angle-tolerance",
         ),
+        (
+            vec!["--frame", "out/frame.json", "--token", "short"],
+            "--token has 5 characters, at least 12",
+        ),
     ];
     let busy = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let busy_addr = busy.local_addr().unwrap().to_string();
@@ -200,4 +207,79 @@ fn serve_bad_input_is_a_one_line_error() {
         );
         assert!(!out.stderr.contains("panicked"), "{out:?}");
     }
+}
+
+/// A websocket to a running server, past `hello`.
+fn join(addr: &str, token: &str, client_id: &str) -> tungstenite::WebSocket<TcpStream> {
+    let tcp = TcpStream::connect(addr).unwrap();
+    tcp.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    let mut req = format!("ws://{addr}/ws").into_client_request().unwrap();
+    req.headers_mut()
+        .insert("sec-websocket-protocol", "spinvalence.v1".parse().unwrap());
+    let (mut ws, _) = tungstenite::client(req, tcp).expect("websocket handshake");
+    assert_eq!(recv(&mut ws)["type"], "welcome");
+    ws.send(Message::text(
+        json!({"type": "hello", "token": token, "client_id": client_id}).to_string(),
+    ))
+    .unwrap();
+    assert_eq!(recv(&mut ws)["type"], "ready");
+    ws
+}
+
+#[test]
+fn every_acknowledged_complete_survives_kill_9() {
+    let dir = solved();
+    let token = "op-token-0123";
+    let mut acked: Vec<(String, String)> = Vec::new();
+    let mut units: Vec<String> = Vec::new();
+    for round in 0..3 {
+        let mut server = serve(&dir, &["--token", token, "--state", "state.sqlite"]);
+        let mut ws = join(&server.addr, token, "welder");
+        if units.is_empty() {
+            ws.send(Message::text(json!({"type": "get_targets"}).to_string()))
+                .unwrap();
+            let t = recv(&mut ws);
+            units = t["units"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|u| u["id"].as_str().unwrap().to_string())
+                .collect();
+        }
+        // four completes per round; kill -9 the moment the last ack arrives
+        for k in 0..4 {
+            let unit = units[round * 4 + k].clone();
+            let op_id = format!("round{round}-{k}");
+            ws.send(Message::text(
+                json!({"type": "complete", "unit": unit, "op_id": op_id}).to_string(),
+            ))
+            .unwrap();
+            loop {
+                let m = recv(&mut ws);
+                if m["type"] == "ack" {
+                    assert_eq!(m["applied"], true, "{m}");
+                    acked.push((unit, op_id));
+                    break;
+                }
+                assert_ne!(m["type"], "error", "{m}");
+            }
+        }
+        server.child.kill().unwrap(); // SIGKILL: no shutdown, no flush
+        server.child.wait().unwrap();
+        // every acknowledged complete is in the state file, with its op id
+        let db = rusqlite::Connection::open(dir.path().join("state.sqlite")).unwrap();
+        for (unit, op_id) in &acked {
+            let found: Option<String> = db
+                .query_row("SELECT op_id FROM completed WHERE unit = ?1", [unit], |r| {
+                    r.get(0)
+                })
+                .ok();
+            assert_eq!(
+                found.as_deref(),
+                Some(op_id.as_str()),
+                "round {round}: {unit} lost"
+            );
+        }
+    }
+    assert_eq!(acked.len(), 12);
 }

@@ -14,17 +14,17 @@ use crate::output;
 const SERVE_EXAMPLES: &str = "\
 Examples:
   # serve out/frame.json on this machine only (open http://127.0.0.1:8765/)
-  spinvalence serve --frame out/frame.json --token s3cret
+  spinvalence serve --frame out/frame.json --token 5f0c2a9d41e7b3c8
 
   # on the shop LAN, with read-only screens, progress kept in a state file
-  spinvalence serve --frame out/frame.json --bind 0.0.0.0:8765 --token s3cret \\
-      --viewer-token look --state site.sqlite
+  spinvalence serve --frame out/frame.json --bind 0.0.0.0:8765 --token 5f0c2a9d41e7b3c8 \\
+      --viewer-token look-only-2026 --state site.sqlite
 
   # HTTPS/WSS (WebXR needs a secure origin on anything but localhost)
-  spinvalence serve --frame out/frame.json --bind 0.0.0.0:8443 --token s3cret \\
+  spinvalence serve --frame out/frame.json --bind 0.0.0.0:8443 --token 5f0c2a9d41e7b3c8 \\
       --tls-cert cert.pem --tls-key key.pem
 
-The page takes the token in its field or as http://HOST:PORT/#token=s3cret (the fragment
+The page takes the token in its field or as http://HOST:PORT/#token=5f0c2a9d41e7b3c8 (the fragment
 never reaches the server); add ?sim=1 for a simulated tracker. Stop with Ctrl-C.";
 
 /// `spinvalence serve`.
@@ -100,9 +100,6 @@ pub fn config(args: &ServeArgs) -> Result<ServeConfig> {
             bail!("{flag} must not be empty");
         }
     }
-    if args.token.is_some() && args.token == args.viewer_token {
-        bail!("--token and --viewer-token must differ");
-    }
     if let Some(p) = &args.tls_cert {
         existing_file("--tls-cert", p)?;
     }
@@ -136,6 +133,9 @@ pub fn config(args: &ServeArgs) -> Result<ServeConfig> {
         angle_deg: args.angle_tolerance,
         overlap_mm: args.overlap_tolerance,
     };
+    config
+        .check()
+        .map_err(|e| anyhow!("{}", e.to_string().trim_start_matches("config: ")))?;
     Ok(config)
 }
 

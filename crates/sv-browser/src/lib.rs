@@ -136,6 +136,8 @@ impl Browser {
                 "--disable-extensions",
                 "--disable-background-networking",
                 "--disable-component-update",
+                "--disable-quic",
+                "--disable-sync",
                 "--remote-debugging-port=0",
             ])
             .arg(format!(
@@ -181,6 +183,11 @@ impl Browser {
     /// Open a new tab on `url` with the network, runtime and log domains enabled before the
     /// navigation, so that every request and error of the page is recorded.
     pub fn open(&self, url: &str) -> Result<Page> {
+        self.open_with(url, &OpenOptions::default())
+    }
+
+    /// [`Browser::open`] with scripts run before the page's own and an emulated device.
+    pub fn open_with(&self, url: &str, options: &OpenOptions) -> Result<Page> {
         let addr = self
             .ws_url
             .trim_start_matches("ws://")
@@ -216,9 +223,54 @@ impl Browser {
         for domain in ["Network", "Runtime", "Log", "Page"] {
             page.call(&format!("{domain}.enable"), json!({}))?;
         }
+        if let Some(d) = &options.device {
+            page.call(
+                "Emulation.setDeviceMetricsOverride",
+                json!({"width": d.width, "height": d.height,
+                       "deviceScaleFactor": d.scale, "mobile": d.mobile}),
+            )?;
+        }
+        for source in &options.init_scripts {
+            page.call(
+                "Page.addScriptToEvaluateOnNewDocument",
+                json!({"source": source}),
+            )?;
+        }
         page.call("Page.navigate", json!({"url": url}))?;
         Ok(page)
     }
+}
+
+/// How [`Browser::open_with`] prepares a tab.
+#[derive(Clone, Debug, Default)]
+pub struct OpenOptions {
+    /// JavaScript run in every document before its own scripts (a test runtime, a stub).
+    pub init_scripts: Vec<String>,
+    /// Emulate this screen (a phone) instead of the window.
+    pub device: Option<Device>,
+}
+
+/// An emulated screen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Device {
+    /// Viewport width (CSS pixels).
+    pub width: u32,
+    /// Viewport height (CSS pixels).
+    pub height: u32,
+    /// Device pixels per CSS pixel.
+    pub scale: f64,
+    /// A mobile device (meta viewport honoured, overlay scrollbars).
+    pub mobile: bool,
+}
+
+impl Device {
+    /// A 390 x 844 phone at 3x (an iPhone 12 to 14's screen).
+    pub const PHONE: Device = Device {
+        width: 390,
+        height: 844,
+        scale: 3.0,
+        mobile: true,
+    };
 }
 
 /// One request a page made.

@@ -328,7 +328,10 @@ fn the_time_cap_cuts_the_search_and_says_by_how_much() {
     // linear in the time the set-up leaves: each 100 ms more adds the same work
     let (w1, w2, w3) = (derived(200), derived(300), derived(400));
     assert!(w1.work_budget > 10_000, "{w1:?}");
-    let (d1, d2) = (w2.work_budget - w1.work_budget, w3.work_budget - w2.work_budget);
+    let (d1, d2) = (
+        w2.work_budget - w1.work_budget,
+        w3.work_budget - w2.work_budget,
+    );
     assert!(d1 > 0 && d1.abs_diff(d2) <= 2, "{w1:?} {w2:?} {w3:?}");
     assert_eq!(derived(0).work_budget, 0);
     let inst = StripInstance::read(&dataset("jakobs1")).unwrap();

@@ -107,7 +107,7 @@ async fn client(
         .map_err(|e| format!("handshake: {e}"))?;
     let (mut sink, mut stream) = ws.split();
     let text = |v: Value| Message::text(v.to_string());
-    sink.send(text(json!({"type": "hello", "token": "bench"})))
+    sink.send(text(json!({"type": "hello", "token": "bench-token-0123"})))
         .await
         .map_err(|e| e.to_string())?;
     // welcome, ready
@@ -203,8 +203,11 @@ fn main() {
     let state = tempfile::tempdir().expect("temporary directory");
     let mut config = ServeConfig::new(frame.clone());
     config.bind = "127.0.0.1:0".into();
-    config.token = Some("bench".into());
+    config.token = Some("bench-token-0123".into());
     config.state_path = Some(state.path().join("bench.sqlite"));
+    // every bench client connects from 127.0.0.1: lift the per-address limits for them
+    config.address_limits.connections = 2 * o.clients;
+    config.address_limits.pending = 2 * o.clients;
     let server_rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .thread_name("server")

@@ -36,8 +36,11 @@ pub fn pose_of(iso: &Isometry3) -> Pose {
 }
 
 /// Isometry of a wire pose; `None` unless finite with a non-zero quaternion.
+///
+/// The quaternion is scaled by its largest component before it is squared, so components up
+/// to `f64::MAX` normalise exactly instead of overflowing to infinity (which would make every
+/// rotation look like the identity).
 pub fn iso_of(pose: &Pose) -> Option<Isometry3> {
-    let [x, y, z, w] = pose.rotation;
     if !pose
         .position
         .iter()
@@ -46,22 +49,38 @@ pub fn iso_of(pose: &Pose) -> Option<Isometry3> {
     {
         return None;
     }
-    let q = nalgebra::Quaternion::new(w, x, y, z);
-    if q.norm() < 1e-9 {
+    let [x, y, z, w] = pose.rotation;
+    let big = pose.rotation.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if big == 0.0 {
         return None;
     }
+    let q = nalgebra::Quaternion::new(w / big, x / big, y / big, z / big);
     let p = pose.position;
     Some(Isometry3::from_parts(
         Vector3::new(p[0], p[1], p[2]).into(),
-        UnitQuaternion::from_quaternion(q),
+        UnitQuaternion::new_normalize(q),
     ))
 }
 
-/// Compare a tracked pose with its target: (position error mm, angle error deg, target - tracked).
-pub fn compare(target: &Isometry3, tracked: &Isometry3) -> (f64, f64, [f64; 3]) {
+/// Length of a vector without overflow in the squares (scaled by its largest component).
+pub fn safe_norm(v: &Vector3) -> f64 {
+    let big = v.amax();
+    if big == 0.0 || !big.is_finite() {
+        return big;
+    }
+    big * (v / big).norm()
+}
+
+/// Compare a tracked pose with its target: (position error mm, angle error deg, target -
+/// tracked), or `None` when a result is not a finite number (a pose near `f64::MAX`).
+pub fn compare(target: &Isometry3, tracked: &Isometry3) -> Option<(f64, f64, [f64; 3])> {
     let d = target.translation.vector - tracked.translation.vector;
     let angle = target.rotation.angle_to(&tracked.rotation).to_degrees();
-    (d.norm(), angle, [d.x, d.y, d.z])
+    let distance = safe_norm(&d);
+    [distance, angle, d.x, d.y, d.z]
+        .iter()
+        .all(|v| v.is_finite())
+        .then_some((distance, angle, [d.x, d.y, d.z]))
 }
 
 /// Result of a rigid fit.
@@ -150,11 +169,80 @@ pub fn kabsch(pairs: &[[[f64; 3]; 2]], collinear_ratio: f64) -> Result<Fit, FitE
         .map(|p| (iso * Point3::from(to_v(&p[0])) - Point3::from(to_v(&p[1]))).norm())
         .collect();
     let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / n).sqrt();
+    let p = pose_of(&iso);
+    if !(rms.is_finite() && p.position.iter().chain(&p.rotation).all(|v| v.is_finite())) {
+        return Err(FitError::Degenerate(
+            "coordinates too large: the fit is not a finite number".into(),
+        ));
+    }
     Ok(Fit {
         iso,
         rms,
         residuals,
     })
+}
+
+/// One unit's design target: the corners of its hub and primary tile (mm, model frame) and
+/// the poses the protocol derives from them ([`tile_pose`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct UnitTarget {
+    /// Hub corners.
+    pub hub: [[f64; 3]; 4],
+    /// Primary tile corners.
+    pub primary: [[f64; 3]; 4],
+    /// Hub pose.
+    pub hub_pose: Isometry3,
+    /// Primary tile pose.
+    pub primary_pose: Isometry3,
+}
+
+/// Every unit's target, in file order: the one place the streamer takes target corners and
+/// poses from a frame. Today these are the frame's `hub` and `primary` corners; when
+/// `frame.json` carries the plates as cut (issue 14), this function switches to them.
+/// An error names the unit whose tile is not finite or degenerate.
+pub fn unit_targets(frame: &FrameFile) -> Result<Vec<UnitTarget>, String> {
+    let ids = unit_ids(frame);
+    frame
+        .units
+        .iter()
+        .enumerate()
+        .map(|(i, u)| {
+            let finite = u
+                .hub
+                .iter()
+                .chain(&u.primary)
+                .flatten()
+                .all(|v| v.is_finite());
+            match (finite, tile_pose(&u.hub), tile_pose(&u.primary)) {
+                (true, Some(hub_pose), Some(primary_pose)) => Ok(UnitTarget {
+                    hub: u.hub,
+                    primary: u.primary,
+                    hub_pose,
+                    primary_pose,
+                }),
+                _ => Err(format!("unit {} (index {i}) has a degenerate tile", ids[i])),
+            }
+        })
+        .collect()
+}
+
+/// The design hub overlap (mm) of every link, keyed by its unit indices (smaller first): the
+/// one place the streamer takes the expected overlap from. Today the link's `hub_overlap`;
+/// when `frame.json` carries the plates as cut (issue 14), their physical overlap.
+pub fn design_overlaps(frame: &FrameFile) -> Result<HashMap<(usize, usize), f64>, String> {
+    let n = frame.units.len();
+    let mut out = HashMap::new();
+    for l in &frame.links {
+        let [a, b] = l.units;
+        if a >= n || b >= n || a == b {
+            return Err(format!("link {a}-{b} does not join two units of the frame"));
+        }
+        if !l.hub_overlap.is_finite() {
+            return Err(format!("link {a}-{b} has a non-finite hub_overlap"));
+        }
+        out.insert((a.min(b), a.max(b)), l.hub_overlap);
+    }
+    Ok(out)
 }
 
 /// Wire id of each unit: its `id` label when present (`"A03-02"`), else its index (`"7"`).
@@ -280,6 +368,42 @@ mod tests {
         assert!(p.rotation[3] > 0.999999);
         let back = iso_of(&p).unwrap();
         assert!((back.rotation.angle_to(&iso.rotation)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn huge_quaternions_keep_their_rotation() {
+        // 90 degrees about z, scaled far beyond where squaring overflows
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        for scale in [1.0, 1e154, 1e300, f64::MAX / 2.0] {
+            let pose = Pose {
+                position: [0.0; 3],
+                rotation: [0.0, 0.0, h * scale, h * scale],
+            };
+            let iso = iso_of(&pose).unwrap();
+            let angle = iso.rotation.angle().to_degrees();
+            assert!((angle - 90.0).abs() < 1e-9, "scale {scale}: {angle} deg");
+        }
+        let zero = Pose {
+            position: [0.0; 3],
+            rotation: [0.0; 4],
+        };
+        assert!(iso_of(&zero).is_none());
+    }
+
+    #[test]
+    fn far_positions_give_finite_errors_or_none() {
+        let target = Isometry3::identity();
+        let far = iso_of(&Pose {
+            position: [1e308, 1e308, 0.0],
+            rotation: [0.0, 0.0, 0.0, 1.0],
+        })
+        .unwrap();
+        let (d, _, m) = compare(&target, &far).unwrap();
+        assert!(d.is_finite() && d > 1.4e308, "{d}");
+        assert_eq!(m[0], -1e308);
+        let beyond = Isometry3::translation(-f64::MAX, 0.0, 0.0);
+        let opposite = Isometry3::translation(f64::MAX, 0.0, 0.0);
+        assert!(compare(&beyond, &opposite).is_none());
     }
 
     #[test]

@@ -25,6 +25,13 @@ pub const MAX_REGISTER_POINTS: usize = 1000;
 pub const CLOSE_HELLO_TIMEOUT: u16 = 4408;
 /// Close code: bad token.
 pub const CLOSE_UNAUTHORIZED: u16 = 4401;
+/// Close code: too many wrong tokens from this address; retry later.
+pub const CLOSE_THROTTLED: u16 = 4429;
+/// Largest `targets` page and largest replay carried by `ready` (bytes of JSON); a larger
+/// frame comes in several `targets` pages, a longer replay as a snapshot.
+pub const MAX_PAGE_BYTES: usize = 256 * 1024;
+/// Shortest accepted `--token` / `--viewer-token`: a shorter one falls to guessing.
+pub const MIN_TOKEN_LEN: usize = 12;
 
 /// A rigid pose: position (mm) and rotation as a unit quaternion `[x, y, z, w]`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -98,6 +105,9 @@ pub enum Source {
     Manual,
     /// Simulated tracker.
     Sim,
+    /// Measured in the AR page: hub corners picked with a controller, a hand ray or a screen
+    /// tap (hit-test), the pose fitted to them.
+    Ar,
 }
 
 /// What a connection may do.
@@ -183,6 +193,13 @@ pub enum ClientMessage {
         /// Idempotency key (a UUID); applied once.
         op_id: String,
     },
+    /// Take back a `complete` within the undo window (same client, same `op_id`).
+    Undo {
+        /// Unit id.
+        unit: String,
+        /// The `op_id` of the `complete` to take back.
+        op_id: String,
+    },
     /// Site registration: pairs `[model xyz, measured xyz]`.
     Register {
         /// At least 3 non-collinear pairs.
@@ -197,7 +214,7 @@ pub enum ClientMessage {
 }
 
 /// Every `type` a client may send.
-pub const CLIENT_TYPES: [&str; 9] = [
+pub const CLIENT_TYPES: [&str; 10] = [
     "hello",
     "get_targets",
     "track",
@@ -205,6 +222,7 @@ pub const CLIENT_TYPES: [&str; 9] = [
     "claim",
     "release",
     "complete",
+    "undo",
     "register",
     "ping",
 ];
@@ -237,6 +255,8 @@ pub struct Target {
     pub hub: [[f64; 3]; 4],
     /// Primary corners.
     pub primary: [[f64; 3]; 4],
+    /// Ids of the units sharing a link with this one (an `overlap` is measured with them).
+    pub neighbours: Vec<String>,
 }
 
 /// The state a client missed, when replay is not possible.
@@ -311,7 +331,11 @@ pub enum ServerMessage {
         frame: CoordFrame,
         /// Whether a registration is applied.
         registered: bool,
-        /// All units, in file order.
+        /// Index of this page's first unit in the frame (pages come in order).
+        offset: usize,
+        /// Units in the frame: the answer is complete when `offset + units.len() == total`.
+        total: usize,
+        /// This page's units, in file order (at most [`MAX_PAGE_BYTES`] of JSON per page).
         units: Vec<Target>,
     },
     /// Answer to `track`.
@@ -418,6 +442,10 @@ pub enum ErrorCode {
     NotClaimed,
     /// Registration points collinear or too few.
     Degenerate,
+    /// `undo` of a complete that is not this client's, not the unit's last, or too old.
+    NotUndoable,
+    /// Too many wrong tokens from this address (then close 4429).
+    Throttled,
     /// Server fault (persistence).
     Internal,
 }
@@ -461,6 +489,23 @@ pub enum Event {
         /// Client id.
         by: String,
     },
+    /// A completed unit was taken back (`undo`).
+    Reopened {
+        /// Event number.
+        seq: u64,
+        /// The unit, no longer complete.
+        unit: String,
+        /// Client id that took it back.
+        by: String,
+        /// The `op_id` of the undone `complete`.
+        op_id: String,
+        /// Units completed.
+        done: usize,
+        /// Units in the frame.
+        total: usize,
+        /// Next unit in the assembly sequence.
+        next: Option<String>,
+    },
     /// A registration was accepted.
     Registration {
         /// Event number.
@@ -479,6 +524,7 @@ impl Event {
             Event::Progress { seq, .. }
             | Event::Claimed { seq, .. }
             | Event::Released { seq, .. }
+            | Event::Reopened { seq, .. }
             | Event::Registration { seq, .. } => *seq,
         }
     }

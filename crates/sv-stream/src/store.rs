@@ -2,11 +2,14 @@
 //!
 //! The `events` table is the source of truth: every numbered [`Event`] is written (with the
 //! derived `completed` / `claims` / `registration` rows, for people reading the file) in one
-//! transaction before it is broadcast. Measurements (`track`, `overlap`) go to `measurements`
-//! through a writer thread that batches them. `meta` holds the epoch and the frame hash.
+//! transaction, and the write-ahead log is fsynced, before the event is applied, broadcast or
+//! acknowledged. Measurements (`track`, `overlap`) go to `measurements` through a writer
+//! thread that batches them; a measurement that cannot be written is counted and reported to
+//! the client that sent it. `meta` holds the epoch and the frame hash.
 
-use std::path::Path;
-use std::sync::mpsc;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{mpsc, Arc};
 use std::thread::JoinHandle;
 
 use rusqlite::{params, Connection, OptionalExtension};
@@ -16,7 +19,7 @@ use crate::StreamError;
 
 const SCHEMA: &str = "
 PRAGMA journal_mode = WAL;
-PRAGMA synchronous = NORMAL;
+PRAGMA synchronous = NORMAL; -- plus an fsync of the log after every event (Store::sync)
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS events (seq INTEGER PRIMARY KEY, kind TEXT NOT NULL, json TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS completed (unit TEXT PRIMARY KEY, op_id TEXT NOT NULL UNIQUE,
@@ -31,6 +34,10 @@ CREATE TABLE IF NOT EXISTS measurements (id INTEGER PRIMARY KEY, t_ms INTEGER NO
 /// The event store.
 pub(crate) struct Store {
     conn: Connection,
+    /// The write-ahead log, fsynced after every commit (`None` in memory).
+    wal: Option<PathBuf>,
+    /// fsyncs of the log that succeeded: the test hook behind [`crate::Stats::event_fsyncs`].
+    pub fsyncs: Arc<AtomicU64>,
 }
 
 fn db(e: rusqlite::Error) -> StreamError {
@@ -44,8 +51,13 @@ pub(crate) struct Loaded {
 }
 
 impl Store {
-    /// Open (or create) the state file; `None` keeps everything in memory.
-    pub fn open(path: Option<&Path>, frame_hash: &str) -> Result<(Store, Loaded), StreamError> {
+    /// Open (or create) the state file; `None` keeps everything in memory. `max_pages`
+    /// caps the file (SQLite's `max_page_count`), for tests of a full disk.
+    pub fn open(
+        path: Option<&Path>,
+        frame_hash: &str,
+        max_pages: Option<u64>,
+    ) -> Result<(Store, Loaded), StreamError> {
         let conn = match path {
             Some(p) => Connection::open(p).map_err(db)?,
             None => Connection::open_in_memory().map_err(db)?,
@@ -89,7 +101,35 @@ impl Store {
                 events.push(ev);
             }
         }
-        Ok((Store { conn }, Loaded { epoch, events }))
+        if let Some(pages) = max_pages {
+            conn.pragma_update(None, "max_page_count", pages as i64)
+                .map_err(db)?;
+        }
+        let wal = path.map(|p| {
+            let mut name = p.as_os_str().to_owned();
+            name.push("-wal");
+            PathBuf::from(name)
+        });
+        let store = Store {
+            conn,
+            wal,
+            fsyncs: Arc::new(AtomicU64::new(0)),
+        };
+        Ok((store, Loaded { epoch, events }))
+    }
+
+    /// Make the last commit durable: fsync the write-ahead log (what SQLite's
+    /// `synchronous = FULL` does at each commit, done here so that it is counted).
+    fn sync(&self) -> Result<(), StreamError> {
+        let Some(wal) = &self.wal else {
+            return Ok(());
+        };
+        let file = std::fs::File::open(wal)
+            .map_err(|e| StreamError::State(format!("{}: {e}", wal.display())))?;
+        file.sync_data()
+            .map_err(|e| StreamError::State(format!("fsync {}: {e}", wal.display())))?;
+        self.fsyncs.fetch_add(1, Ordering::Release);
+        Ok(())
     }
 
     /// Write one event and its derived rows atomically.
@@ -125,6 +165,11 @@ impl Store {
                     .map_err(db)?;
                 "released"
             }
+            Event::Reopened { unit, .. } => {
+                tx.execute("DELETE FROM completed WHERE unit = ?1", [unit])
+                    .map_err(db)?;
+                "reopened"
+            }
             Event::Registration { seq, transform, .. } => {
                 let t = serde_json::to_string(transform).unwrap_or_default();
                 tx.execute(
@@ -140,7 +185,8 @@ impl Store {
             params![event.seq() as i64, kind, json],
         )
         .map_err(db)?;
-        tx.commit().map_err(db)
+        tx.commit().map_err(db)?;
+        self.sync()
     }
 }
 
@@ -159,12 +205,21 @@ pub(crate) struct MeasurementWriter {
     thread: Option<JoinHandle<()>>,
 }
 
+/// Told about measurements that could not be written: (client id, how many, why).
+pub(crate) type OnWriteFailure = Box<dyn Fn(&str, u64, &str) + Send>;
+
 /// Queue length of the measurement writer; beyond it measurements are dropped (and counted).
 pub(crate) const MEASUREMENT_QUEUE: usize = 65_536;
 
 impl MeasurementWriter {
-    /// Start the writer on `path` (nothing is written when `None`).
-    pub fn start(path: Option<&Path>) -> Result<Self, StreamError> {
+    /// Start the writer on `path` (nothing is written when `None`). Rows that fail are
+    /// counted in `failed` and reported through `on_failure`, per client.
+    pub fn start(
+        path: Option<&Path>,
+        max_pages: Option<u64>,
+        failed: Arc<AtomicU64>,
+        on_failure: OnWriteFailure,
+    ) -> Result<Self, StreamError> {
         let Some(path) = path else {
             return Ok(Self {
                 tx: None,
@@ -174,6 +229,10 @@ impl MeasurementWriter {
         let mut conn = Connection::open(path).map_err(db)?;
         conn.busy_timeout(std::time::Duration::from_secs(5))
             .map_err(db)?;
+        if let Some(pages) = max_pages {
+            conn.pragma_update(None, "max_page_count", pages as i64)
+                .map_err(db)?;
+        }
         let (tx, rx) = mpsc::sync_channel::<Measurement>(MEASUREMENT_QUEUE);
         let thread = std::thread::spawn(move || {
             while let Ok(first) = rx.recv() {
@@ -184,17 +243,20 @@ impl MeasurementWriter {
                         break;
                     }
                 }
-                let Ok(txn) = conn.transaction() else {
-                    continue;
-                };
-                for m in &batch {
-                    let _ = txn.execute(
-                        "INSERT INTO measurements (t_ms, client_id, kind, unit, json) \
-                         VALUES (?1, ?2, ?3, ?4, ?5)",
-                        params![m.t_ms as i64, m.client_id, m.kind, m.unit, m.json],
-                    );
+                if let Err(e) = write_batch(&mut conn, &batch) {
+                    failed.fetch_add(batch.len() as u64, Ordering::Relaxed);
+                    let mut per_client: Vec<(&str, u64)> = Vec::new();
+                    for m in &batch {
+                        match per_client.iter_mut().find(|(c, _)| *c == m.client_id) {
+                            Some(entry) => entry.1 += 1,
+                            None => per_client.push((&m.client_id, 1)),
+                        }
+                    }
+                    let why = e.to_string();
+                    for (client, n) in per_client {
+                        on_failure(client, n, &why);
+                    }
                 }
-                let _ = txn.commit();
             }
         });
         Ok(Self {
@@ -221,6 +283,19 @@ impl Drop for MeasurementWriter {
     fn drop(&mut self) {
         self.stop();
     }
+}
+
+/// Write a batch in one transaction (all or nothing).
+fn write_batch(conn: &mut Connection, batch: &[Measurement]) -> rusqlite::Result<()> {
+    let txn = conn.transaction()?;
+    for m in batch {
+        txn.execute(
+            "INSERT INTO measurements (t_ms, client_id, kind, unit, json) \
+             VALUES (?1, ?2, ?3, ?4, ?5)",
+            params![m.t_ms as i64, m.client_id, m.kind, m.unit, m.json],
+        )?;
+    }
+    txn.commit()
 }
 
 /// A fresh epoch: 16 hex digits from the clock, the process id and a counter.

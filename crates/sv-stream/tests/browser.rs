@@ -79,6 +79,34 @@ fn drive_the_page(url: &str) {
         "blank 3D view: {} colours",
         image.distinct_colours()
     );
+    // figures with enough digits to tell ok from bad, and a malformed check clears the verdict
+    let unit = next.as_str().unwrap();
+    let text = |page: &mut sv_browser::Page, pos: f64, ok: bool| {
+        page.eval(&format!(
+            "window.__sv.handle({{type: 'check', unit: '{unit}', part: 'hub', ok: {ok}, \
+             position_error_mm: {pos}, angle_error_deg: 0.2, move_mm: [1, 0, 0], frame: 'model', \
+             coalesced: 0}}); document.getElementById('check').textContent"
+        ))
+        .unwrap()
+        .as_str()
+        .unwrap()
+        .to_string()
+    };
+    let ok = text(&mut page, 4.99, true);
+    assert!(ok.contains("4.99 mm <= 5.00 mm"), "{ok}");
+    let bad = text(&mut page, 5.01, false);
+    assert!(bad.contains("5.01 mm > 5.00 mm"), "{bad}");
+    let close = text(&mut page, 5.0004, false);
+    assert!(close.contains("5.0004 mm > 5.00 mm"), "{close}");
+    // (one script: the simulated tracker's next check cannot come in between)
+    let after = page
+        .eval(&format!(
+            "window.__sv.handle({{type: 'check', unit: '{unit}', part: 'hub', ok: true, \
+             position_error_mm: null, angle_error_deg: 0.1, move_mm: [0, 0, 0], coalesced: 0}}); \
+             document.body.dataset.check"
+        ))
+        .unwrap();
+    assert_eq!(after, "none", "a malformed check left a verdict");
     assert!(page.errors().is_empty(), "page errors: {:?}", page.errors());
     // the token never went to the server in a URL
     let urls: Vec<&str> = page.requests().iter().map(|r| r.url.as_str()).collect();
@@ -87,4 +115,39 @@ fn drive_the_page(url: &str) {
         urls.iter().all(|u| !u.contains(TOKEN)),
         "token in a URL: {urls:?}"
     );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_twenty_thousand_unit_frame_loads_in_the_page() {
+    let mut cfg = config();
+    cfg.frame = big_frame(200, 100);
+    let server = Server::start(cfg).await.unwrap();
+    let url = format!("{}#token={TOKEN}", server.url());
+    tokio::task::spawn_blocking(move || {
+        let browser = Browser::launch().unwrap();
+        let mut page = browser.open(&url).unwrap();
+        page.wait_for(
+            "document.body.dataset.units === '20000' && document.body.dataset.progress === '0/20000'",
+            Duration::from_secs(120),
+            "20,000 units in the page",
+        )
+        .unwrap();
+        page.pump(Duration::from_millis(500)).unwrap();
+        let image = page.screenshot("#view canvas").unwrap();
+        assert!(
+            image.fraction_unlike([0x10, 0x13, 0x17], 8) > 0.01,
+            "blank 3D view of 20,000 units"
+        );
+        // one connection: the pages never closed it
+        let sockets = page
+            .requests()
+            .iter()
+            .filter(|r| r.kind == "WebSocket")
+            .count();
+        assert_eq!(sockets, 1, "{:?}", page.requests());
+        assert!(page.errors().is_empty(), "page errors: {:?}", page.errors());
+    })
+    .await
+    .unwrap();
+    server.shutdown().await;
 }

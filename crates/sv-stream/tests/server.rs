@@ -207,7 +207,7 @@ async fn bad_messages_keep_the_connection() {
     server.shutdown().await;
 }
 
-use futures_util::SinkExt;
+use futures_util::{SinkExt, StreamExt};
 use tokio_tungstenite::tungstenite::Message;
 
 #[tokio::test]
@@ -240,7 +240,8 @@ async fn wrong_token_closes_4401_and_silence_closes_4408() {
     let server = Server::start(cfg).await.unwrap();
     let mut c = connect(&server).await;
     c.expect("welcome").await;
-    c.send(json!({"type": "hello", "token": "op-secreT"})).await;
+    c.send(json!({"type": "hello", "token": "op-secret-2025"}))
+        .await;
     assert_eq!(c.expect("error").await["code"], "unauthorized");
     assert_eq!(c.closed().await, Some(4401));
 
@@ -782,5 +783,266 @@ async fn tls_serves_page_and_websocket() {
     req.headers_mut()
         .insert("sec-websocket-protocol", "spinvalence.v1".parse().unwrap());
     assert!(tokio_tungstenite::client_async(req, tcp).await.is_err());
+    server.shutdown().await;
+}
+
+#[tokio::test]
+async fn a_twenty_thousand_unit_frame_comes_in_pages() {
+    let mut cfg = config();
+    cfg.frame = big_frame(200, 100);
+    let server = Server::start(cfg).await.unwrap();
+    let mut c = connect(&server).await;
+    c.join(TOKEN, "w").await;
+    c.send(json!({"type": "get_targets", "frame": "model"}))
+        .await;
+    let mut seen = 0;
+    let mut pages = 0;
+    let mut largest = 0;
+    while seen < 20_000 {
+        let msg = match c.ws.next().await {
+            Some(Ok(Message::Text(t))) => t,
+            other => panic!("after {seen} units: {other:?}"),
+        };
+        largest = largest.max(msg.len());
+        let v: Value = serde_json::from_str(msg.as_str()).unwrap();
+        validate(&v);
+        assert_eq!(v["type"], "targets");
+        assert_eq!(v["offset"], seen, "pages in order, none skipped");
+        assert_eq!(v["total"], 20_000);
+        let units = v["units"].as_array().unwrap();
+        assert_eq!(
+            units[0]["id"],
+            format!("A{:03}-{:03}", seen / 200, seen % 200)
+        );
+        seen += units.len();
+        pages += 1;
+    }
+    assert_eq!(seen, 20_000);
+    assert!(pages > 1);
+    assert!(
+        largest <= sv_stream::protocol::MAX_PAGE_BYTES,
+        "page of {largest} bytes"
+    );
+    // the connection is still up and answers in order
+    c.send(json!({"type": "ping", "t": 5})).await;
+    assert_eq!(c.expect("pong").await["t"], 5);
+    server.shutdown().await;
+}
+
+#[tokio::test]
+async fn undo_takes_back_a_complete_for_everyone() {
+    let server = Server::start(config()).await.unwrap();
+    let mut a = connect(&server).await;
+    let mut b = connect(&server).await;
+    let (_, ready) = a.join(TOKEN, "welder-a").await;
+    b.join(TOKEN, "welder-b").await;
+    let u = ready["snapshot"]["next"].as_str().unwrap().to_string();
+    a.send(json!({"type": "complete", "unit": u, "op_id": "op-1"}))
+        .await;
+    a.expect("progress").await;
+    a.expect("ack").await;
+    b.expect("progress").await;
+    b.send(json!({"type": "undo", "unit": u, "op_id": "op-1"}))
+        .await;
+    assert_eq!(b.expect("error").await["code"], "not_undoable");
+    a.send(json!({"type": "undo", "unit": u, "op_id": "op-1"}))
+        .await;
+    let ev = a.expect("reopened").await;
+    assert_eq!(
+        (ev["done"].clone(), ev["next"].clone()),
+        (json!(0), json!(u))
+    );
+    let ack = a.expect("ack").await;
+    assert_eq!(
+        (ack["op"].clone(), ack["applied"].clone()),
+        (json!("undo"), json!(true))
+    );
+    assert_eq!(b.expect("reopened").await["seq"], ev["seq"]);
+    // the unit can be completed again with a new op id
+    b.send(json!({"type": "complete", "unit": u, "op_id": "op-2"}))
+        .await;
+    assert_eq!(b.expect("progress").await["done"], 1);
+    server.shutdown().await;
+}
+
+#[tokio::test]
+async fn hostile_numbers_get_errors_or_valid_checks() {
+    let server = Server::start(config()).await.unwrap();
+    let mut c = connect(&server).await;
+    c.join(TOKEN, "w").await;
+    let id = frame().units[3].id.clone();
+    let exact = pose_json(&target(3));
+    // a huge quaternion of the same rotation is the same rotation, not 0 degrees of anything
+    let turned = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 10f64.to_radians())
+        * target(3).rotation;
+    let q = turned.coords;
+    let big: Vec<f64> = [q.x, q.y, q.z, q.w].iter().map(|v| v * 1e300).collect();
+    c.send(json!({"type": "track", "unit": id, "part": "hub", "pose": {"position": exact["position"], "rotation": big}})).await;
+    let ch = c.expect("check").await;
+    approx(&ch["angle_error_deg"], 10.0, 1e-6);
+    assert_eq!(ch["ok"], false);
+    // far away: a finite error (validated as a number), never null
+    c.send(json!({"type": "track", "unit": id, "part": "hub", "pose": {"position": [1e308, 1e308, 1e308], "rotation": exact["rotation"]}})).await;
+    let ch = c.expect("check").await;
+    assert!(ch["position_error_mm"].as_f64().unwrap() > 1e308);
+    assert_eq!(ch["ok"], false);
+    c.send(json!({"type": "register", "points": [[[0, 0, 0], [1e308, 1e308, 1e308]], [[1000, 0, 0], [-1e308, 1e308, 0]], [[0, 1000, 0], [1e308, -1e308, 1e308]]]})).await;
+    assert_eq!(c.expect("error").await["code"], "degenerate");
+    c.send(json!({"type": "overlap", "units": [frame().units[0].id, frame().units[1].id], "measured_mm": 1e300})).await;
+    assert_eq!(c.expect("error").await["code"], "bad_message");
+    server.shutdown().await;
+}
+
+#[tokio::test]
+async fn wrong_tokens_are_throttled_per_address_and_short_tokens_refused() {
+    let server = Server::start(config()).await.unwrap();
+    for k in 0..5 {
+        let mut c = connect(&server).await;
+        c.expect("welcome").await;
+        c.send(json!({"type": "hello", "token": format!("guess-{k}")}))
+            .await;
+        assert_eq!(c.expect("error").await["code"], "unauthorized");
+        assert_eq!(c.closed().await, Some(4401));
+    }
+    // the sixth try from 127.0.0.1 is refused unread, even with the right token
+    let mut c = connect(&server).await;
+    c.expect("welcome").await;
+    c.send(json!({"type": "hello", "token": TOKEN})).await;
+    let e = c.expect("error").await;
+    assert_eq!(e["code"], "throttled");
+    assert_eq!(c.closed().await, Some(4429));
+    // another address is not affected
+    let mut d = connect_from(&server, [127, 0, 0, 2]).await;
+    let (_, ready) = d.join(TOKEN, "other").await;
+    assert_eq!(ready["role"], "operator");
+    let stats = server.stats();
+    assert_eq!((stats.auth_failures, stats.auth_throttled), (5, 1));
+    server.shutdown().await;
+
+    let mut cfg = config();
+    cfg.token = Some("OPER".into());
+    let err = Server::start(cfg).await.err().unwrap().to_string();
+    assert!(err.contains("at least 12"), "{err}");
+}
+
+#[tokio::test]
+async fn junk_before_hello_cannot_keep_a_connection_pending() {
+    let server = Server::start(config()).await.unwrap();
+    let mut c = connect(&server).await;
+    c.expect("welcome").await;
+    let mut errors = 0;
+    for _ in 0..40 {
+        if c.ws.send(Message::text("junk")).await.is_err() {
+            break;
+        }
+    }
+    let code = loop {
+        match c.try_recv(Duration::from_secs(5)).await {
+            Some(Ok(m)) => {
+                assert_eq!(m["type"], "error");
+                errors += 1;
+            }
+            Some(Err(code)) => break code,
+            None => panic!("still open"),
+        }
+    };
+    assert_eq!(code, Some(4408));
+    assert!(errors <= 16, "{errors} errors before the close");
+    server.shutdown().await;
+}
+
+#[tokio::test]
+async fn every_acknowledged_event_is_fsynced_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cfg = config();
+    cfg.state_path = Some(dir.path().join("state.sqlite"));
+    let server = Server::start(cfg).await.unwrap();
+    let mut c = connect(&server).await;
+    c.join(TOKEN, "w").await;
+    let before = server.stats().event_fsyncs;
+    for k in 0..5 {
+        let u = frame().units[k].id.clone();
+        c.send(json!({"type": "complete", "unit": u, "op_id": format!("op-{k}")}))
+            .await;
+        c.expect("progress").await;
+        c.expect("ack").await;
+        // the ack left after the fsync: the counter already has it
+        assert_eq!(server.stats().event_fsyncs, before + k as u64 + 1);
+    }
+    // a replayed op id stores nothing and syncs nothing
+    c.send(json!({"type": "complete", "unit": frame().units[0].id, "op_id": "op-0"}))
+        .await;
+    assert_eq!(c.expect("ack").await["applied"], false);
+    assert_eq!(server.stats().event_fsyncs, before + 5);
+    server.shutdown().await;
+}
+
+#[tokio::test]
+async fn a_full_disk_is_an_error_and_a_count_never_a_silent_drop() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("state.sqlite");
+    let mut cfg = config();
+    cfg.state_path = Some(path.clone());
+    // first run: create the file, learn its size in pages
+    Server::start(cfg.clone()).await.unwrap().shutdown().await;
+    let pages: u64 = rusqlite::Connection::open(&path)
+        .unwrap()
+        .query_row("PRAGMA page_count", [], |r| r.get(0))
+        .unwrap();
+    cfg.state_max_pages = Some(pages);
+    let server = Server::start(cfg).await.unwrap();
+    let mut c = connect(&server).await;
+    c.join(TOKEN, "w").await;
+    let u = frame().units[0].id.clone();
+    // a long op id and many tracks fill the capped file
+    let mut internal = 0;
+    for k in 0..40 {
+        let op_id = format!("{k}-{}", "x".repeat(120));
+        c.send(json!({"type": "complete", "unit": frame().units[k % 36].id, "op_id": op_id}))
+            .await;
+        loop {
+            let m = c.recv().await;
+            match m["type"].as_str().unwrap() {
+                "error" if m["code"] == "internal" => {
+                    internal += 1;
+                    break;
+                }
+                "ack" | "error" => break,
+                _ => {}
+            }
+        }
+        if internal > 0 {
+            break;
+        }
+    }
+    assert!(internal > 0, "the capped file never filled");
+    let stats = server.stats();
+    assert!(stats.store_errors >= 1, "{stats:?}");
+    // tracks still get their checks; the measurements that could not be written are an
+    // error to this client and a count
+    let pose = pose_json(&target(0));
+    let mut failed_reported = false;
+    for i in 0..40 {
+        c.send(json!({"type": "track", "unit": u, "part": "hub", "pose": pose, "ref": i}))
+            .await;
+    }
+    let mut checks = 0;
+    while let Some(Ok(m)) = c.try_recv(Duration::from_secs(2)).await {
+        match m["type"].as_str().unwrap() {
+            "check" => checks += 1,
+            "error" => {
+                assert_eq!(m["code"], "internal");
+                assert!(m["message"]
+                    .as_str()
+                    .unwrap()
+                    .contains("could not be stored"));
+                failed_reported = true;
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(checks, 40);
+    assert!(failed_reported, "no error for the lost measurements");
+    assert!(server.stats().measurements_failed > 0);
     server.shutdown().await;
 }

@@ -17,9 +17,9 @@ use tokio_tungstenite::tungstenite::Message;
 use tokio_tungstenite::WebSocketStream;
 
 /// Operator token used by the tests.
-pub const TOKEN: &str = "op-secret";
+pub const TOKEN: &str = "op-secret-2026";
 /// Viewer token used by the tests.
-pub const VIEWER: &str = "view-secret";
+pub const VIEWER: &str = "view-secret-2026";
 
 /// A 6x6 sphere cap frame (R 3000 mm, 300 mm units), strips by mesh row.
 pub fn frame() -> FrameFile {
@@ -168,4 +168,72 @@ impl<S: AsyncRead + AsyncWrite + Unpin> Client<S> {
             }
         }
     }
+}
+
+/// A synthetic flat frame of `nx x ny` units on a 300 mm grid (no solve: for size tests).
+/// Hubs are diamonds at z = 100, primary tiles turned squares at z = 0, strips by row,
+/// links between grid neighbours with a 10 mm design overlap. Records are cloned from the
+/// solved [`frame`] and only their corners, ids and links changed, so the helper keeps up
+/// with new fields of `frame.json`.
+pub fn big_frame(nx: usize, ny: usize) -> FrameFile {
+    let base = frame();
+    let step = 300.0;
+    let mut units = Vec::with_capacity(nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            let (cx, cy) = ((i as f64 + 0.5) * step, (j as f64 + 0.5) * step);
+            let r = 0.5 * step;
+            let (c, s) = (0.3f64.cos() * 0.45 * step, 0.3f64.sin() * 0.45 * step);
+            let mut u = base.units[0].clone();
+            u.id = format!("A{j:03}-{i:03}");
+            u.strip = format!("A{j:03}");
+            u.face = (j * nx + i) % base.units.len();
+            u.hub = [
+                [cx + r, cy, 100.0],
+                [cx, cy + r, 100.0],
+                [cx - r, cy, 100.0],
+                [cx, cy - r, 100.0],
+            ];
+            u.primary = [
+                [cx + c, cy + s, 0.0],
+                [cx - s, cy + c, 0.0],
+                [cx - c, cy - s, 0.0],
+                [cx + s, cy - c, 0.0],
+            ];
+            units.push(u);
+        }
+    }
+    let mut links = Vec::new();
+    let link = |a: usize, b: usize| {
+        let mut l = base.links[0].clone();
+        l.units = [a, b];
+        l.hub_overlap = 10.0;
+        l
+    };
+    for j in 0..ny {
+        for i in 0..nx {
+            let u = j * nx + i;
+            if i + 1 < nx {
+                links.push(link(u, u + 1));
+            }
+            if j + 1 < ny {
+                links.push(link(u, u + nx));
+            }
+        }
+    }
+    FrameFile {
+        units,
+        links,
+        ..base
+    }
+}
+
+/// Connect from a chosen loopback source address (127.0.0.x all route to `lo` on Linux).
+pub async fn connect_from(server: &Server, source: [u8; 4]) -> Client<TcpStream> {
+    let socket = tokio::net::TcpSocket::new_v4().unwrap();
+    socket
+        .bind(std::net::SocketAddr::from((source, 0)))
+        .unwrap();
+    let tcp = socket.connect(server.local_addr()).await.unwrap();
+    connect_on(tcp, &format!("ws://{}/ws", server.local_addr())).await
 }
