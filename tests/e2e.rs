@@ -18,6 +18,8 @@ mod build;
 mod check;
 #[path = "e2e/cli.rs"]
 mod cli;
+#[path = "e2e/dxf_inputs.rs"]
+mod dxf_inputs;
 #[path = "e2e/hygiene.rs"]
 mod hygiene;
 #[path = "e2e/nest.rs"]

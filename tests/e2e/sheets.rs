@@ -75,9 +75,9 @@ fn bbox(p: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
 
 /// A part as read from a sheet DXF: its outline and the inside contours written just
 /// before it.
-struct SheetPart {
-    outline: Vec<[f64; 2]>,
-    holes: Vec<Vec<[f64; 2]>>,
+pub(crate) struct SheetPart {
+    pub(crate) outline: Vec<[f64; 2]>,
+    pub(crate) holes: Vec<Vec<[f64; 2]>>,
 }
 
 impl SheetPart {
@@ -88,7 +88,7 @@ impl SheetPart {
 
 /// The parts of a sheet DXF, checking the cut order on the way: every INSIDE contour lies
 /// in the outline that follows it (inside contours first, then their part's outline).
-fn parts_of(name: &str, entities: &[DxfEntity]) -> Vec<SheetPart> {
+pub(crate) fn parts_of(name: &str, entities: &[DxfEntity]) -> Vec<SheetPart> {
     let mut parts = Vec::new();
     let mut pending: Vec<Vec<[f64; 2]>> = Vec::new();
     for e in entities.iter().filter(|e| e.kind == "LWPOLYLINE") {

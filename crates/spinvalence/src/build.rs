@@ -174,6 +174,7 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         &parts,
         &options.nest,
         Some(cfg.profile.thickness),
+        &sv_export::ShopConvention::default(),
         args.quiet,
     )?;
     if let Some(l) = nested.report.left_out.first() {

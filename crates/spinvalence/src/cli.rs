@@ -87,12 +87,20 @@ Examples:
   # two stock sizes, 8 mm margin, free rotation, one minute
   spinvalence nest a.dxf b.dxf --sheet 3000x1500,2500x1250 --margin 8 --free-rotation --nest-seconds 60 --out out/n
 
+  # a flat pattern drawn in inches, bend lines on a layer called FOLD
+  spinvalence nest bracket.dxf --units in --layer 'FOLD=skip' --out out/b
+
   # a strip-packing benchmark instance (jagua-rs JSON)
   spinvalence nest ../shared/datasets/nesting/spp/fu.json --nest-seconds 60 --out out/fu
 
+Reads LINE, ARC, CIRCLE, LWPOLYLINE, POLYLINE, SPLINE and ELLIPSE (turned into arcs), blocks
+through INSERTs, $INSUNITS and extrusion directions; bend, construction, dimension and
+border layers and dashed lines are not cut (docs/dxf.md has the layer rules). Every entity
+skipped or repaired is named on a `note:` line and in nest.json's notes.
 Writes DIR/nest.json and, per sheet, DIR/sheets/sheet-NN_WxHmm[_tTmm].dxf (layers OUTSIDE,
-INSIDE, ETCH, INFO; pierce points and labels on INFO) and .svg (or DIR/strip.json for an
-instance).
+INSIDE, ETCH, INFO; etching first, outside contours clockwise, inside ones counter-clockwise
+and before their outline; pierce points and labels on INFO) and .svg (or DIR/strip.json for
+an instance).
 Parts that cannot be nested (open or self-intersecting contours, larger than every sheet,
 unreadable files) are left out, each named on one `warning:` line on stderr and in
 nest.json's left_out; the others still nest (exit code 0). The layout is decided by a
@@ -151,6 +159,29 @@ pub struct NestArgs {
     /// Material thickness (mm), for the sheet file names and titles.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     pub thickness: Option<f64>,
+    /// Units of the DXF files, overriding their $INSUNITS (mm, cm, m, in, ft, ...).
+    #[arg(long, value_name = "UNIT")]
+    pub units: Option<String>,
+    /// Ends of lines and arcs closer than this are joined (mm).
+    #[arg(long, value_name = "MM", default_value_t = sv_dxf::DEFAULT_JOIN_TOLERANCE, allow_negative_numbers = true)]
+    pub join_tolerance: f64,
+    /// SPLINE and ELLIPSE become arcs within this distance (mm).
+    #[arg(long, value_name = "MM", default_value_t = sv_dxf::DEFAULT_ARC_TOLERANCE, allow_negative_numbers = true)]
+    pub arc_tolerance: f64,
+    /// A layer rule PATTERN=ROLE (ROLE: outside, inside, cut, etch, skip; `*` and `?` in
+    /// the pattern), before the defaults; repeat for several.
+    #[arg(long = "layer", value_name = "PATTERN=ROLE")]
+    pub layers: Vec<String>,
+    /// Nest contours found inside holes (islands) as parts of their own.
+    #[arg(long)]
+    pub islands: bool,
+    /// Cut direction on the sheets: outside-cw (outside contours clockwise, inside ones
+    /// counter-clockwise) or outside-ccw.
+    #[arg(long, value_name = "DIR", default_value = "outside-cw")]
+    pub cut_direction: String,
+    /// Where the etching goes in the sheet files: first (before every cut) or last.
+    #[arg(long, value_name = "WHEN", default_value = "first")]
+    pub etch: String,
     /// Output directory.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,

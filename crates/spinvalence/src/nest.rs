@@ -5,9 +5,9 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Result};
-use sv_export::SheetPart;
+use sv_export::{CutDirection, EtchOrder, SheetPart, ShopConvention};
 use sv_nest::sheets::LeftOut;
-use sv_nest::{NestOptions, RotationMode, StockSheet, StripInstance, StripOptions};
+use sv_nest::{NestOptions, Part, RotationMode, StockSheet, StripInstance, StripOptions};
 
 use crate::cli::NestArgs;
 use crate::output::{self, number, AtomicDir, AtomicFiles};
@@ -34,6 +34,53 @@ pub fn parse_sheets(text: &str) -> Result<Vec<StockSheet>> {
             }
         })
         .collect()
+}
+
+/// The reader's options from the flags; one line naming a bad flag.
+fn read_options(args: &NestArgs) -> Result<sv_dxf::ReadOptions> {
+    let units = args
+        .units
+        .as_deref()
+        .map(|u| {
+            u.parse::<sv_dxf::Units>()
+                .map_err(|e| anyhow!("invalid --units: {e}"))
+        })
+        .transpose()?;
+    for (flag, v) in [
+        ("--join-tolerance", args.join_tolerance),
+        ("--arc-tolerance", args.arc_tolerance),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            bail!("invalid {flag} {v}: must be a positive length in mm");
+        }
+    }
+    let user = args
+        .layers
+        .iter()
+        .map(|r| r.parse().map_err(|e| anyhow!("invalid --layer {e}")))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(sv_dxf::ReadOptions {
+        units,
+        join_tolerance: args.join_tolerance,
+        arc_tolerance: args.arc_tolerance,
+        layers: sv_dxf::LayerRules { user },
+        islands: args.islands,
+    })
+}
+
+/// The shop convention of the sheets from the flags.
+fn convention(args: &NestArgs) -> Result<ShopConvention> {
+    let direction = match args.cut_direction.as_str() {
+        "outside-cw" => CutDirection::OutsideClockwise,
+        "outside-ccw" => CutDirection::OutsideCounterClockwise,
+        other => bail!("invalid --cut-direction {other:?}: outside-cw or outside-ccw"),
+    };
+    let etch = match args.etch.as_str() {
+        "first" => EtchOrder::BeforeCuts,
+        "last" => EtchOrder::AfterCuts,
+        other => bail!("invalid --etch {other:?}: first or last"),
+    };
+    Ok(ShopConvention { direction, etch })
 }
 
 /// Check the numeric options; one line naming the flag.
@@ -72,13 +119,16 @@ pub fn run(args: &NestArgs) -> Result<()> {
         return run_strip(args, json[0]);
     }
     let sheets = parse_sheets(&args.sheet)?;
+    let read_options = read_options(args)?;
+    let convention = convention(args)?;
     let mut parts: Vec<SheetPart> = Vec::new();
     let mut left_out: Vec<LeftOut> = Vec::new();
+    let mut notes: Vec<sv_dxf::Note> = Vec::new();
     let mut stems: Vec<String> = Vec::new();
     for path in &args.parts {
         let name = path.display().to_string();
-        let text = match output::read_bytes(path) {
-            Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
+        let bytes = match output::read_bytes(path) {
+            Ok(bytes) => bytes,
             Err(e) => {
                 left_out.push(LeftOut {
                     part: name,
@@ -95,30 +145,47 @@ pub fn run(args: &NestArgs) -> Result<()> {
             .filter(|s| !stems.contains(s) && !s.is_empty())
             .unwrap_or_else(|| name.clone());
         stems.push(stem.clone());
-        match sv_nest::dxf::parse_parts(&text, &stem) {
+        match sv_dxf::read_dxf(&bytes, &stem, &read_options) {
             Ok(read) => {
                 // the parts with what they etch (labels and fold marks of a strip DXF)
-                parts.extend(
-                    read.parts
-                        .into_iter()
-                        .zip(read.etch)
-                        .map(|(part, etch)| SheetPart { part, etch }),
-                );
+                parts.extend(read.parts.into_iter().map(|p| SheetPart {
+                    part: Part {
+                        id: p.id,
+                        outer: p.outer,
+                        holes: p.holes,
+                    },
+                    etch: p.etch,
+                }));
                 left_out.extend(read.rejected.into_iter().map(|e| LeftOut {
                     part: name.clone(),
                     reason: e.to_string(),
                 }));
+                notes.extend(read.notes.into_iter().map(|n| sv_dxf::Note {
+                    file: name.clone(),
+                    ..n
+                }));
             }
             Err(e) => left_out.push(LeftOut {
                 part: name,
-                reason: e.to_string(),
+                // the file is named by `part`
+                reason: match e {
+                    sv_dxf::DxfError::Dxf { message, .. } => message,
+                    other => other.to_string(),
+                },
             }),
         }
     }
     if parts.is_empty() {
+        // the first reason, naming the file unless it does already
         let why = left_out
             .first()
-            .map_or("no closed contours".to_string(), |l| l.reason.clone());
+            .map_or("no closed contours".to_string(), |l| {
+                if l.reason.contains(&l.part) {
+                    l.reason.clone()
+                } else {
+                    format!("{}: {}", l.part, l.reason)
+                }
+            });
         bail!("nothing to nest: {why}");
     }
     if let Some(t) = args.thickness {
@@ -139,7 +206,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
         ..NestOptions::default()
     };
     let started = Instant::now();
-    let mut stage = crate::sheets::run(&parts, &options, args.thickness, args.quiet)?;
+    let mut stage = crate::sheets::run(&parts, &options, args.thickness, &convention, args.quiet)?;
     stage.report.left_out.extend(left_out);
     let report = &stage.report;
     // one line per part left out, even with --quiet: the others were nested without it
@@ -152,7 +219,10 @@ pub fn run(args: &NestArgs) -> Result<()> {
     for (name, text) in &stage.drawings {
         sheet_dir.write(name, text)?;
     }
-    let json = serde_json::to_string_pretty(report)?;
+    // nest.json with what the reader skipped and repaired
+    let mut json = serde_json::to_value(report)?;
+    json["notes"] = serde_json::to_value(&notes)?;
+    let json = serde_json::to_string_pretty(&json)?;
     sheet_dir.commit()?;
     files.commit(&[&json])?;
     if !args.quiet {
@@ -169,7 +239,11 @@ pub fn run(args: &NestArgs) -> Result<()> {
             ]);
         }
         rows.push(vec!["wall time".into(), seconds(started.elapsed())]);
-        output::print_out(&output::table(&rows))?;
+        let mut text = output::table(&rows);
+        for n in &notes {
+            text.push_str(&format!("note: {n}\n"));
+        }
+        output::print_out(&text)?;
     }
     Ok(())
 }

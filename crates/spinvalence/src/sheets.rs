@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
-use sv_export::{SheetCaption, SheetPart};
+use sv_export::{SheetCaption, SheetPart, ShopConvention};
 use sv_nest::{NestOptions, NestReport, Part};
 
 use crate::solve::progress_bar;
@@ -26,13 +26,14 @@ pub struct NestStage {
 /// machine, both cores: measured on the 664 strips of the 20 x 12 m dome (docs/nesting.md).
 const DRAW_SECONDS_PER_PART: f64 = 3e-3;
 
-/// Nest `parts` with `options` and draw the sheets; `thickness` (mm) goes into the file
-/// names and titles when known. `options.time_limit` bounds both (the nesting is given what
-/// the drawing is expected to leave).
+/// Nest `parts` with `options` and draw the sheets in `convention`; `thickness` (mm) goes
+/// into the file names and titles when known. `options.time_limit` bounds both (the nesting
+/// is given what the drawing is expected to leave).
 pub fn run(
     parts: &[SheetPart],
     options: &NestOptions,
     thickness: Option<f64>,
+    convention: &ShopConvention,
     quiet: bool,
 ) -> Result<NestStage> {
     let plain: Vec<Part> = parts.iter().map(|p| p.part.clone()).collect();
@@ -63,10 +64,9 @@ pub fn run(
         .map(|i| {
             let sheet = &report.sheets[i];
             let stem = sv_export::sheet_file_stem(i, sheet.width, sheet.height, thickness);
-            let dxf = sv_export::sheet_dxf(&report, i, parts, &caption)
+            let dxf = sv_export::sheet_dxf(&report, i, parts, &caption, convention)
                 .map_err(|e| anyhow!("nesting: {e}"))?;
-            let svg =
-                sv_nest::svg::sheet_svg(&report, &plain, i, sv_nest::DEFAULT_FLATTEN_TOLERANCE);
+            let svg = sv_export::sheet_svg(&report, &plain, i);
             Ok((stem, dxf, svg))
         })
         .collect();

@@ -1,9 +1,11 @@
-//! Fabrication file writers: DXF ASCII R2000 and SVG drawings of profiled strips. Writers
-//! return `String`; the caller writes files.
+//! Fabrication drawings: what goes on the DXF and SVG of a profiled strip and of a nested
+//! sheet (the DXF format itself is `sv-dxf`'s). Writers return `String`; the caller writes
+//! files.
 //!
 //! - [`strip_dxf`]: one DXF per strip, layers `OUTSIDE`, `INSIDE`, `ETCH`, `INFO`.
 //! - [`sheet_dxf`]: one DXF per nested sheet, same writer and layers, pierce points in scrap.
 //! - [`strip_svg`]: a drawing for the fabricator (labels, fold marks, scale bar, title).
+//! - [`sheet_svg`]: a preview of a nested sheet.
 //! - [`text_strokes`]: the built-in single-stroke font used for etched labels.
 //!
 //! ```
@@ -20,12 +22,18 @@
 //! assert!(svg.starts_with("<svg"));
 //! ```
 
-mod dxf;
 mod font;
+mod preview;
 mod sheet;
+mod strip;
 mod svg;
 
-pub use dxf::{etch_strokes, strip_dxf, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
 pub use font::{has_glyph, text_strokes, text_width};
-pub use sheet::{sheet_dxf, sheet_file_stem, strip_sheet_part, SheetCaption, SheetPart};
-pub use svg::strip_svg;
+pub use preview::sheet_svg;
+pub use sheet::{
+    sheet_dxf, sheet_file_stem, strip_sheet_part, CutDirection, EtchOrder, SheetCaption, SheetPart,
+    ShopConvention,
+};
+pub use strip::{etch_strokes, strip_dxf};
+pub use sv_dxf::{LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
+pub use svg::{path_data as svg_path_data, strip_svg};

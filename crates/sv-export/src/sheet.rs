@@ -7,11 +7,15 @@
 //! label (`TEXT` on `INFO`). The sheet outline, the sheet title and the reusable offcut
 //! are on `INFO` too.
 
-use sv_nest::part::{boundary_distance, point_in_polygon, polygon_area, segment_distance};
-use sv_nest::{Contour, NestReport, Part, Vertex};
+use sv_dxf::{Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
+use sv_geom::planar::{
+    bbox, boundary_distance, point_in_polygon, point_segment_distance, polygon_area,
+};
+use sv_geom::Contour;
+use sv_nest::{NestReport, Part};
 use sv_strips::{FlatStrip, StripProfile};
 
-use crate::dxf::{etch_strokes, Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
+use crate::strip::etch_strokes;
 
 /// Chord tolerance (mm) for the pierce-point search.
 const FLATTEN: f64 = 0.05;
@@ -36,28 +40,14 @@ impl SheetPart {
     }
 }
 
-fn contour(c: &sv_strips::Contour) -> Contour {
-    Contour {
-        vertices: c
-            .0
-            .iter()
-            .map(|v| Vertex {
-                x: v[0],
-                y: v[1],
-                bulge: v[2],
-            })
-            .collect(),
-    }
-}
-
 /// The nesting part of a profiled strip: outline, slots as holes, labels and fold marks as
 /// etching, in the strip's frame (the coordinates of `strips/ID.dxf` and `strips.json`).
 pub fn strip_sheet_part(strip: &FlatStrip, profile: &StripProfile) -> SheetPart {
     SheetPart {
         part: Part {
             id: strip.id.clone(),
-            outer: contour(&profile.outline),
-            holes: profile.cuts.iter().map(contour).collect(),
+            outer: profile.outline.clone(),
+            holes: profile.cuts.clone(),
         },
         etch: etch_strokes(profile),
     }
@@ -75,6 +65,55 @@ pub fn sheet_file_stem(index: usize, width: f64, height: f64, thickness: Option<
         stem.push_str(&format!("_t{}mm", mm(t)));
     }
     stem
+}
+
+/// Which way cut contours run (the CAM follows the direction written).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CutDirection {
+    /// Outside contours clockwise, inside contours counter-clockwise: the usual plasma
+    /// convention (with a right-hand swirl the good edge of the part is on the right).
+    #[default]
+    OutsideClockwise,
+    /// Outside contours counter-clockwise, inside contours clockwise.
+    OutsideCounterClockwise,
+}
+
+impl CutDirection {
+    /// Whether outside contours run counter-clockwise.
+    pub fn outside_ccw(self) -> bool {
+        self == CutDirection::OutsideCounterClockwise
+    }
+}
+
+/// Where the etching goes in the file (a CAM that follows file order etches in it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EtchOrder {
+    /// All etching before the first cut, so nothing is etched on a part already cut free.
+    #[default]
+    BeforeCuts,
+    /// All etching after the last cut.
+    AfterCuts,
+}
+
+/// The shop conventions of a sheet or strip DXF (`docs/dxf.md`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ShopConvention {
+    /// Which way contours run.
+    pub direction: CutDirection,
+    /// Where the etching goes.
+    pub etch: EtchOrder,
+}
+
+impl ShopConvention {
+    /// An outline in this convention (same first vertex).
+    pub fn outside(&self, c: &Contour) -> Contour {
+        c.oriented(self.direction.outside_ccw())
+    }
+
+    /// A hole in this convention (same first vertex).
+    pub fn inside(&self, c: &Contour) -> Contour {
+        c.oriented(!self.direction.outside_ccw())
+    }
 }
 
 /// What the sheet title says besides the sheet number and size.
@@ -99,7 +138,7 @@ impl Placed {
     fn new(part: Part) -> Self {
         let outer = part.outer.flatten(FLATTEN);
         let holes = part.holes.iter().map(|h| h.flatten(FLATTEN)).collect();
-        let (lo, hi) = sv_nest::part::bbox(&outer);
+        let (lo, hi) = bbox(&outer);
         Self {
             part,
             outer,
@@ -107,6 +146,13 @@ impl Placed {
             lo,
             hi,
         }
+    }
+
+    /// Distance from `p` to this part's box (0 inside it): no point of the part is nearer.
+    fn box_distance(&self, p: [f64; 2]) -> f64 {
+        let dx = (self.lo[0] - p[0]).max(p[0] - self.hi[0]).max(0.0);
+        let dy = (self.lo[1] - p[1]).max(p[1] - self.hi[1]).max(0.0);
+        dx.hypot(dy)
     }
 
     /// Whether `p` is on this part's material (inside the outline, outside every hole),
@@ -131,7 +177,7 @@ impl Placed {
 /// boundary across (for a thin slot that is its centre line, which a grid would miss),
 /// then a local grid refinement around the best. About `n²` work for `n` vertices.
 fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
-    let (lo, hi) = sv_nest::part::bbox(poly);
+    let (lo, hi) = bbox(poly);
     let reach = (hi[0] - lo[0]).min(hi[1] - lo[1]);
     let ccw = polygon_area(poly) > 0.0;
     let mut best = ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], -1.0);
@@ -141,7 +187,7 @@ fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
             // the distance to the boundary, given up as soon as it is no better
             let mut d = f64::INFINITY;
             for i in 0..n {
-                d = d.min(segment_distance(p, poly[i], poly[(i + 1) % n]));
+                d = d.min(point_segment_distance(p, poly[i], poly[(i + 1) % n]));
                 if d <= best.1 {
                     return;
                 }
@@ -245,23 +291,18 @@ fn outside_pierce(parts: &[Placed], k: usize, offset: f64, sheet: [f64; 2]) -> [
             continue;
         }
         // clearance: distance to the nearest material of any part (own outline included);
-        // a part whose bounding box is farther than the offset cannot make it short
-        let clear = parts
-            .iter()
-            .filter(|q| {
-                p[0] >= q.lo[0] - offset
-                    && p[1] >= q.lo[1] - offset
-                    && p[0] <= q.hi[0] + offset
-                    && p[1] <= q.hi[1] + offset
-            })
-            .map(|q| {
-                if q.covers(p, 0.0) {
-                    0.0
-                } else {
-                    boundary_distance(p, &q.outer)
-                }
-            })
-            .fold(f64::INFINITY, f64::min);
+        // a part whose box is farther than the nearest so far cannot be nearer
+        let mut clear = f64::INFINITY;
+        for q in parts {
+            if q.box_distance(p) >= clear {
+                continue;
+            }
+            clear = clear.min(if q.covers(p, 0.0) {
+                0.0
+            } else {
+                boundary_distance(p, &q.outer)
+            });
+        }
         if clear >= 0.9 * offset {
             return p;
         }
@@ -272,14 +313,16 @@ fn outside_pierce(parts: &[Placed], k: usize, offset: f64, sheet: [f64; 2]) -> [
     best.0
 }
 
-/// The DXF text of sheet `index` of `report`. `parts` holds every nested part (looked up
-/// by id). An outline's pierce point sits half the spacing outside it (midway to the
-/// nearest neighbour); a hole's at the point of the hole farthest from its edge.
+/// The DXF text of sheet `index` of `report` in `convention`. `parts` holds every nested
+/// part (looked up by id). An outline's pierce point sits half the spacing outside it
+/// (midway to the nearest neighbour); a hole's at the point of the hole farthest from its
+/// edge.
 pub fn sheet_dxf(
     report: &NestReport,
     index: usize,
     parts: &[SheetPart],
     caption: &SheetCaption,
+    convention: &ShopConvention,
 ) -> Result<String, String> {
     let sheet = report.sheets.get(index).ok_or_else(|| {
         format!(
@@ -319,24 +362,39 @@ pub fn sheet_dxf(
     let offset = (report.sheet.spacing / 2.0).max(0.5);
     let mut d = Drawing::new();
     d.polygon(LAYER_INFO, &[[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]]);
+    let etch_all = |d: &mut Drawing| {
+        for lines in &etch {
+            for l in lines {
+                d.open_line(LAYER_ETCH, l);
+            }
+        }
+    };
+    if convention.etch == EtchOrder::BeforeCuts {
+        etch_all(&mut d);
+    }
     for (k, p) in placed.iter().enumerate() {
         for (hole, flat) in p.part.holes.iter().zip(&p.holes) {
-            d.polyline(LAYER_INSIDE, &bulged(hole), true);
+            d.contour(LAYER_INSIDE, &convention.inside(hole));
             d.point(LAYER_INFO, deepest_point(flat).0);
         }
-        d.polyline(LAYER_OUTSIDE, &bulged(&p.part.outer), true);
+        d.contour(LAYER_OUTSIDE, &convention.outside(&p.part.outer));
         d.point(LAYER_INFO, outside_pierce(&placed, k, offset, [w, h]));
-        for l in &etch[k] {
-            d.open_line(LAYER_ETCH, l);
-        }
-        let size = (p.hi[1] - p.lo[1]).min(p.hi[0] - p.lo[0]);
-        let th = (size / 3.0).clamp(5.0, 40.0);
+        // the label inside the part's box: a third of its smaller side, narrower for a
+        // long id on a small part
         let label = &p.part.id;
+        let chars = label.chars().count().max(1) as f64;
+        let size = (p.hi[1] - p.lo[1]).min(p.hi[0] - p.lo[0]);
+        let th = (size / 3.0)
+            .min(0.8 * (p.hi[0] - p.lo[0]) / chars)
+            .clamp(1.0, 40.0);
         let at = [
-            (p.lo[0] + p.hi[0]) / 2.0 - 0.3 * th * label.chars().count() as f64,
+            (p.lo[0] + p.hi[0]) / 2.0 - 0.3 * th * chars,
             (p.lo[1] + p.hi[1]) / 2.0 - th / 2.0,
         ];
         d.text(LAYER_INFO, label, at, th);
+    }
+    if convention.etch == EtchOrder::AfterCuts {
+        etch_all(&mut d);
     }
     if let Some(o) = report.offcut.as_ref().filter(|o| o.sheet == index) {
         let (x0, y0, x1, y1) = (o.x, o.y, o.x + o.width, o.y + o.height);
@@ -369,11 +427,7 @@ pub fn sheet_dxf(
         title.push_str(&format!("  {}", caption.generator));
     }
     d.text(LAYER_INFO, &title, [0.0, -60.0], 30.0);
-    Ok(d.finish([-10.0, -80.0], [w + 10.0, h + 10.0]))
-}
-
-fn bulged(c: &Contour) -> Vec<[f64; 3]> {
-    c.vertices.iter().map(|v| [v.x, v.y, v.bulge]).collect()
+    Ok(d.finish())
 }
 
 #[cfg(test)]

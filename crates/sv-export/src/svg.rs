@@ -4,31 +4,42 @@
 
 use std::fmt::Write;
 
-use sv_strips::{Contour, FlatStrip, ProfileParams, StripProfile};
+use sv_geom::Contour;
+use sv_strips::{FlatStrip, ProfileParams, StripProfile};
 
 use crate::font::text_strokes;
 
-fn path_of(c: &Contour, d: &mut String) {
-    let n = c.0.len();
-    if n == 0 {
-        return;
-    }
-    let _ = write!(d, "M{:.3},{:.3}", c.0[0][0], c.0[0][1]);
-    for i in 0..n {
-        let [x0, y0, b] = c.0[i];
-        let [x1, y1, _] = c.0[(i + 1) % n];
-        if b.abs() < 1e-12 {
-            let _ = write!(d, "L{x1:.3},{y1:.3}");
-        } else {
-            let sweep = 4.0 * b.atan();
-            let chord = ((x1 - x0).powi(2) + (y1 - y0).powi(2)).sqrt();
-            let r = chord / (2.0 * (sweep / 2.0).sin().abs());
-            let large = u8::from(sweep.abs() > std::f64::consts::PI);
-            let pos = u8::from(b > 0.0);
-            let _ = write!(d, "A{r:.3},{r:.3} 0 {large} {pos} {x1:.3},{y1:.3}");
+/// SVG path data of a closed contour in its own (y up) coordinates, `decimals` digits
+/// after the point (one more for arc radii): `M x y`, then `L x y` per straight segment and
+/// `A r r 0 large ccw x y` per arc (SVG's sweep flag 1 is counter-clockwise in y-up
+/// coordinates), closed by `Z`. Arcs stay arcs.
+pub fn path_data(contour: &Contour, decimals: usize) -> String {
+    let mut d = String::new();
+    let n = contour.vertices.len();
+    let p = decimals;
+    for (i, s) in contour.segments().enumerate() {
+        if i == 0 {
+            let _ = write!(d, "M{:.p$} {:.p$}", s.start[0], s.start[1]);
+        }
+        let [x, y] = s.end;
+        match s.arc() {
+            Some((r, _)) => {
+                let large = u8::from(s.sweep().abs() > std::f64::consts::PI);
+                let ccw = u8::from(s.bulge > 0.0);
+                let q = p + 1;
+                let _ = write!(d, "A{r:.q$} {r:.q$} 0 {large} {ccw} {x:.p$} {y:.p$}");
+            }
+            // the last straight segment is drawn by Z
+            None if i + 1 < n => {
+                let _ = write!(d, "L{x:.p$} {y:.p$}");
+            }
+            None => {}
         }
     }
-    d.push('Z');
+    if n > 0 {
+        d.push('Z');
+    }
+    d
 }
 
 fn polyline(points: &[[f64; 2]]) -> String {
@@ -109,10 +120,9 @@ pub fn strip_svg(strip: &FlatStrip, profile: &StripProfile, params: &ProfilePara
         );
     }
     // the part: outline and cuts in one even-odd path
-    let mut d = String::new();
-    path_of(&profile.outline, &mut d);
+    let mut d = path_data(&profile.outline, 3);
     for c in &profile.cuts {
-        path_of(c, &mut d);
+        d.push_str(&path_data(c, 3));
     }
     let _ = writeln!(
         s,
@@ -177,7 +187,7 @@ pub fn strip_svg(strip: &FlatStrip, profile: &StripProfile, params: &ProfilePara
 }
 
 /// Text for an SVG attribute or element.
-fn escape(text: &str) -> String {
+pub(crate) fn escape(text: &str) -> String {
     text.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
@@ -187,6 +197,24 @@ fn escape(text: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn path_data_of_straight_and_arc_segments() {
+        let square = Contour::polygon(&[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]);
+        assert_eq!(
+            path_data(&square, 1),
+            "M0.0 0.0L10.0 0.0L10.0 10.0L0.0 10.0Z"
+        );
+        // a circle of radius 10 as two counter-clockwise half arcs
+        let circle = Contour::new(vec![[0.0, 0.0, 1.0].into(), [20.0, 0.0, 1.0].into()]);
+        assert_eq!(
+            path_data(&circle, 1),
+            "M0.0 0.0A10.00 10.00 0 0 1 20.0 0.0A10.00 10.00 0 0 1 0.0 0.0Z"
+        );
+        // more than a half circle, clockwise
+        let big = Contour::new(vec![[0.0, 0.0, -2.0].into(), [10.0, 0.0, 0.0].into()]);
+        assert!(path_data(&big, 1).starts_with("M0.0 0.0A6.25 6.25 0 1 0 10.0 0.0"));
+    }
 
     #[test]
     fn scale_bars_are_round_numbers() {

@@ -66,14 +66,14 @@ fn every_strip_dxf_passes_the_ezdxf_audit() {
         assert!(dxf.ends_with("  0\nEOF\n"));
         // read back by the nesting's DXF reader: one part (the OUTSIDE outline) with every
         // INSIDE slot as a hole; the INFO tiles, pins and title and the ETCH text are skipped
-        let back = sv_nest::dxf::parse_parts(&dxf, &s.id).unwrap();
+        let back = sv_dxf::parse_parts(&dxf, &s.id).unwrap();
         assert!(back.rejected.is_empty(), "{}: {:?}", s.id, back.rejected);
         assert_eq!(back.parts.len(), 1, "{}: one part per outline", s.id);
         assert_eq!(back.parts[0].id, s.id);
         assert_eq!(back.parts[0].holes.len(), p.cuts.len(), "{}: holes", s.id);
         assert_eq!(
             back.parts[0].outer.vertices.len(),
-            p.outline.0.len(),
+            p.outline.vertices.len(),
             "{}: the outline as written",
             s.id
         );
@@ -109,8 +109,8 @@ fn every_sheet_dxf_passes_the_ezdxf_audit_and_reads_back_as_its_parts() {
     let mut files = Vec::new();
     let mut seen = Vec::new();
     for (i, sheet) in report.sheets.iter().enumerate() {
-        let dxf = sv_export::sheet_dxf(&report, i, &parts, &caption).unwrap();
-        let back = sv_nest::dxf::parse_parts(&dxf, "sheet").unwrap();
+        let dxf = sv_export::sheet_dxf(&report, i, &parts, &caption, &Default::default()).unwrap();
+        let back = sv_dxf::parse_parts(&dxf, "sheet").unwrap();
         assert!(back.rejected.is_empty(), "{:?}", back.rejected);
         assert_eq!(back.parts.len(), sheet.placements.len());
         for pl in &sheet.placements {

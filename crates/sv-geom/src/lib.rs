@@ -1,6 +1,7 @@
 //! Geometry core of Spin-Valence: the nalgebra aliases every other crate uses, named
-//! tolerances, a few small 3D queries (closest points of two segments, planarity) and 2D
-//! segment queries for flat patterns ([`planar`]).
+//! tolerances, a few small 3D queries (closest points of two segments, planarity), exact 2D
+//! predicates for flat patterns and sheets ([`planar`]) and the one arc contour of the
+//! workspace ([`Contour`]: flatten, area, length, containment, maps, offsets).
 //!
 //! Conventions: lengths in millimetres, right-handed, Z up, angles in radians.
 //!
@@ -14,9 +15,11 @@
 //! assert!((c.s - 0.5).abs() < 1e-12 && (c.t - 0.5).abs() < 1e-12);
 //! ```
 
+mod contour;
 pub mod planar;
 mod segment;
 
+pub use contour::{Contour, Segment, Vertex, BULGE_EPS};
 pub use segment::{segment_closest, SegmentClosest};
 
 /// The scalar type of all geometry.

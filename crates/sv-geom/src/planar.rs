@@ -1,25 +1,28 @@
-//! 2D segment queries on `[x, y]` points (flat patterns and sheets, mm), shared by the
-//! design-rule check, the nester's outline validation and the tests that measure webs and
-//! spacings.
+//! 2D queries on `[x, y]` points (flat patterns and sheets, mm), shared by the design-rule
+//! check, the nester's outline validation, the sheet writer and the tests that measure
+//! webs and spacings: segment distances and crossings, polygon area, bounds and
+//! containment.
+//!
+//! Side tests are exact (Shewchuk's adaptive orientation predicate from `robust`, as geo
+//! uses), so nearly collinear segments apart on one line never read as crossing, and no
+//! tolerance decides a topological question.
 
-/// Distance from a line (mm) within which a point counts as on it in the side tests below:
-/// far below anything a cutter resolves, far above the rounding of the test. Without it two
-/// nearly collinear segments apart on one line (two straight runs of slots of one unit, say)
-/// can read as crossing, since their side tests are rounding noise.
-pub const ON_LINE: f64 = 1e-6;
+use robust::{orient2d, Coord};
 
-/// Twice the signed area of the triangle `abc` (> 0 counter-clockwise).
-fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
-    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-}
-
-/// Side of `r` relative to the line through `p` and `q`: -1, 0 (within [`ON_LINE`]) or 1.
-fn side(p: [f64; 2], q: [f64; 2], r: [f64; 2]) -> f64 {
-    let o = orient(p, q, r);
-    if o.abs() <= ON_LINE * (q[0] - p[0]).hypot(q[1] - p[1]) {
-        0.0
+/// The side of `c` relative to the directed line through `a` and `b`: 1 left, -1 right,
+/// 0 exactly on it.
+pub fn orientation(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i8 {
+    let o = orient2d(
+        Coord { x: a[0], y: a[1] },
+        Coord { x: b[0], y: b[1] },
+        Coord { x: c[0], y: c[1] },
+    );
+    if o > 0.0 {
+        1
+    } else if o < 0.0 {
+        -1
     } else {
-        o.signum()
+        0
     }
 }
 
@@ -36,14 +39,29 @@ pub fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 /// Whether segments `ab` and `cd` cross properly: the ends of each strictly on both sides
-/// of the other's line (more than [`ON_LINE`] away).
+/// of the other's line (exact).
 pub fn segments_cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
-    side(a, b, c) * side(a, b, d) < 0.0 && side(c, d, a) * side(c, d, b) < 0.0
+    orientation(a, b, c) * orientation(a, b, d) < 0
+        && orientation(c, d, a) * orientation(c, d, b) < 0
 }
 
-/// Whether the closed segments `ab` and `cd` touch (within [`ON_LINE`]) or cross.
+/// Whether `p`, exactly on the line of `ab`, lies within the segment's box.
+fn within(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> bool {
+    p[0] >= a[0].min(b[0])
+        && p[0] <= a[0].max(b[0])
+        && p[1] >= a[1].min(b[1])
+        && p[1] <= a[1].max(b[1])
+}
+
+/// Whether the closed segments `ab` and `cd` touch or cross (exact).
 pub fn segments_intersect(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
-    segments_cross(a, b, c, d) || segment_distance(a, b, c, d) <= ON_LINE
+    let (o1, o2) = (orientation(a, b, c), orientation(a, b, d));
+    let (o3, o4) = (orientation(c, d, a), orientation(c, d, b));
+    (o1 * o2 < 0 && o3 * o4 < 0)
+        || (o1 == 0 && within(a, b, c))
+        || (o2 == 0 && within(a, b, d))
+        || (o3 == 0 && within(c, d, a))
+        || (o4 == 0 && within(c, d, b))
 }
 
 /// Smallest distance between segments `ab` and `cd` (0 when they cross).
@@ -55,6 +73,76 @@ pub fn segment_distance(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f
         .min(point_segment_distance(b, c, d))
         .min(point_segment_distance(c, a, b))
         .min(point_segment_distance(d, a, b))
+}
+
+/// Signed area of the closed polygon `pts` (positive counter-clockwise).
+pub fn polygon_area(pts: &[[f64; 2]]) -> f64 {
+    let n = pts.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (pts[i], pts[(i + 1) % n]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum::<f64>()
+        / 2.0
+}
+
+/// Axis-aligned bounds `(min, max)` of `pts` (infinite and reversed when empty).
+pub fn bbox(pts: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in pts {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
+/// Whether `p` is inside the closed polygon `poly` (even-odd rule; points on an edge may
+/// count either way).
+pub fn point_in_polygon(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
+    let mut inside = false;
+    let n = poly.len();
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        if (a[1] > p[1]) != (b[1] > p[1]) {
+            // exact: is p left of the upward edge (right of a downward one)?
+            let up = b[1] > a[1];
+            let o = orientation(a, b, p);
+            if (up && o > 0) || (!up && o < 0) {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+/// Distance from `p` to the boundary of the closed polygon `poly`.
+pub fn boundary_distance(p: [f64; 2], poly: &[[f64; 2]]) -> f64 {
+    let n = poly.len();
+    (0..n)
+        .map(|i| point_segment_distance(p, poly[i], poly[(i + 1) % n]))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The first pair of non-adjacent edges of the closed polygon `pts` that touch or cross.
+pub fn self_intersection(pts: &[[f64; 2]]) -> Option<(usize, usize)> {
+    let n = pts.len();
+    for i in 0..n {
+        let (a, b) = (pts[i], pts[(i + 1) % n]);
+        for j in i + 1..n {
+            if j == i + 1 || (i == 0 && j == n - 1) {
+                continue;
+            }
+            let (c, d) = (pts[j], pts[(j + 1) % n]);
+            if segments_intersect(a, b, c, d) {
+                return Some((i, j));
+            }
+        }
+    }
+    None
 }
 
 #[cfg(test)]

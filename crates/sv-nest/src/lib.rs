@@ -3,18 +3,18 @@
 //! * [`nest_strip`]: strip packing (fixed height, minimise length) for benchmark instances.
 //! * [`nest_sheets`]: bin packing of [`Part`]s onto rectangular stock sheets with spacing and
 //!   margin, producing [`NestReport`] (`nest.json`).
-//! * [`dxf`]: reader for closed-contour DXF parts; [`svg`]: previews.
 //!
-//! The library never prints; long runs report through a caller-supplied progress callback.
+//! The nester takes [`Part`]s (outlines and holes as `sv_geom::Contour`s, arcs kept) and
+//! returns placements; reading and drawing them is the format crates' work (`sv-dxf`,
+//! `sv-export`). The library never prints; long runs report through a caller-supplied
+//! progress callback.
 
-pub mod dxf;
 mod engine;
 pub mod part;
 mod prepare;
 mod shape;
 pub mod sheets;
 pub mod strip;
-pub mod svg;
 
 pub use part::{Contour, Part, Vertex, DEFAULT_FLATTEN_TOLERANCE};
 pub use sheets::{
@@ -46,14 +46,6 @@ pub enum NestError {
         width: f64,
         /// bounding box height of the part
         height: f64,
-    },
-    /// Unreadable or invalid DXF.
-    #[error("{file}: {message}")]
-    Dxf {
-        /// file name
-        file: String,
-        /// what is wrong (with line number when known)
-        message: String,
     },
     /// Invalid options.
     #[error("invalid options: {0}")]

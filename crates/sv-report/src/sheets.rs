@@ -3,44 +3,12 @@
 
 use std::fmt::Write;
 
+use sv_export::svg_path_data;
 use sv_nest::SheetReport;
-use sv_strips::{Contour, StripRecord};
+use sv_strips::StripRecord;
 
 use crate::plot::escape;
 use crate::ReportInput;
-
-/// SVG path data of a closed contour `[x, y, bulge]` in its own (y up) frame; a bulge `b`
-/// is an arc of radius `c (1 + b^2) / (4 |b|)` over the chord `c`, counter-clockwise when
-/// `b > 0`.
-pub fn contour_path(contour: &Contour) -> String {
-    let v = &contour.0;
-    let mut d = String::new();
-    for (i, p) in v.iter().enumerate() {
-        if i == 0 {
-            let _ = write!(d, "M{:.1} {:.1}", p[0], p[1]);
-        }
-        let q = v[(i + 1) % v.len()];
-        let b = p[2];
-        if b.abs() < 1e-9 {
-            if i + 1 < v.len() {
-                let _ = write!(d, "L{:.1} {:.1}", q[0], q[1]);
-            }
-        } else {
-            let chord = (q[0] - p[0]).hypot(q[1] - p[1]);
-            let r = chord * (1.0 + b * b) / (4.0 * b.abs());
-            let _ = write!(
-                d,
-                "A{r:.2} {r:.2} 0 {} {} {:.1} {:.1}",
-                u8::from(b.abs() > 1.0),
-                u8::from(b > 0.0),
-                q[0],
-                q[1]
-            );
-        }
-    }
-    d.push('Z');
-    d
-}
 
 /// One sheet (`index`, 0-based) as an inline `<svg>` in mm: the stock, the margin, every
 /// placed strip with its slots and its id, the offcut. The root carries `data-sheet`
@@ -71,9 +39,9 @@ pub fn sheet_svg(input: &ReportInput<'_>, sheet: &SheetReport, index: usize) -> 
         let Some(strip) = input.strips.strips.iter().find(|s| s.id == p.strip) else {
             continue;
         };
-        let mut d = contour_path(&strip.outline);
+        let mut d = svg_path_data(&strip.outline, 1);
         for cut in &strip.cuts {
-            d.push_str(&contour_path(cut));
+            d.push_str(&svg_path_data(cut, 1));
         }
         let _ = write!(
             s,
@@ -116,40 +84,12 @@ fn part_colour(k: usize) -> String {
 
 /// The centre of a strip's outline vertices after `p = R(rotation) p + t`.
 fn placed_centre(strip: &StripRecord, rotation_deg: f64, t: [f64; 2]) -> [f64; 2] {
-    let n = strip.outline.0.len().max(1) as f64;
+    let n = strip.outline.vertices.len().max(1) as f64;
     let (x, y) = strip
         .outline
-        .0
+        .vertices
         .iter()
-        .fold((0.0, 0.0), |(x, y), p| (x + p[0] / n, y + p[1] / n));
+        .fold((0.0, 0.0), |(x, y), p| (x + p.x / n, y + p.y / n));
     let (sin, cos) = rotation_deg.to_radians().sin_cos();
     [cos * x - sin * y + t[0], sin * x + cos * y + t[1]]
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn straight_and_arc_segments() {
-        let square = Contour(vec![
-            [0.0, 0.0, 0.0],
-            [10.0, 0.0, 0.0],
-            [10.0, 10.0, 0.0],
-            [0.0, 10.0, 0.0],
-        ]);
-        assert_eq!(
-            contour_path(&square),
-            "M0.0 0.0L10.0 0.0L10.0 10.0L0.0 10.0Z"
-        );
-        // a circle of radius 10 as two counter-clockwise half arcs
-        let circle = Contour(vec![[0.0, 0.0, 1.0], [20.0, 0.0, 1.0]]);
-        assert_eq!(
-            contour_path(&circle),
-            "M0.0 0.0A10.00 10.00 0 0 1 20.0 0.0A10.00 10.00 0 0 1 0.0 0.0Z"
-        );
-        // more than a half circle, clockwise
-        let big = Contour(vec![[0.0, 0.0, -2.0], [10.0, 0.0, 0.0]]);
-        assert!(contour_path(&big).starts_with("M0.0 0.0A6.25 6.25 0 1 0 10.0 0.0"));
-    }
 }

@@ -3,7 +3,7 @@
 use std::collections::HashSet;
 
 use serde::Serialize;
-use sv_strips::{Contour, StripRecord};
+use sv_strips::StripRecord;
 
 use crate::ReportInput;
 
@@ -79,77 +79,10 @@ fn sorted([a, b]: [usize; 2]) -> [usize; 2] {
 
 /// Cut length of one strip (mm): its outline and all its slots.
 pub fn strip_cut_length(strip: &StripRecord) -> f64 {
-    contour_length(&strip.outline) + strip.cuts.iter().map(contour_length).sum::<f64>()
+    strip.outline.length() + strip.cuts.iter().map(|c| c.length()).sum::<f64>()
 }
 
 /// Pierces of one strip: one per closed cut contour.
 pub fn strip_pierces(strip: &StripRecord) -> usize {
     1 + strip.cuts.len()
-}
-
-/// Length of a closed contour (mm). A segment with bulge `b` (`tan` of a quarter of its
-/// sweep) is an arc of sweep `4 atan b` over the chord `c`: length `c (sweep / 2) /
-/// sin(sweep / 2)`.
-pub fn contour_length(contour: &Contour) -> f64 {
-    let v = &contour.0;
-    (0..v.len())
-        .map(|i| {
-            let (a, b) = (v[i], v[(i + 1) % v.len()]);
-            let chord = (b[0] - a[0]).hypot(b[1] - a[1]);
-            arc_length(chord, a[2])
-        })
-        .sum()
-}
-
-/// Length of the arc of bulge `bulge` over a chord of length `chord`.
-pub fn arc_length(chord: f64, bulge: f64) -> f64 {
-    let half = 2.0 * bulge.abs().atan(); // half the sweep
-    if half < 1e-12 {
-        chord
-    } else {
-        chord * half / half.sin()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn close(a: f64, b: f64, tol: f64) -> bool {
-        (a - b).abs() <= tol
-    }
-
-    #[test]
-    fn a_circle_of_two_half_arcs_has_its_circumference() {
-        // bulge 1: a half circle; two of them over a 20 mm chord make a circle of radius 10
-        let circle = Contour(vec![[0.0, 0.0, 1.0], [20.0, 0.0, 1.0]]);
-        assert!(close(
-            contour_length(&circle),
-            20.0 * std::f64::consts::PI,
-            1e-12
-        ));
-        let clockwise = Contour(vec![[0.0, 0.0, -1.0], [20.0, 0.0, -1.0]]);
-        assert!(close(
-            contour_length(&clockwise),
-            20.0 * std::f64::consts::PI,
-            1e-12
-        ));
-    }
-
-    #[test]
-    fn straight_contours_and_quarter_arcs() {
-        let square = Contour(vec![
-            [0.0, 0.0, 0.0],
-            [10.0, 0.0, 0.0],
-            [10.0, 10.0, 0.0],
-            [0.0, 10.0, 0.0],
-        ]);
-        assert_eq!(contour_length(&square), 40.0);
-        // a quarter circle of radius 5: chord 5 sqrt 2, bulge tan(pi / 8)
-        let b = (std::f64::consts::PI / 8.0).tan();
-        let quarter = arc_length(5.0 * 2f64.sqrt(), b);
-        assert!(close(quarter, 2.5 * std::f64::consts::PI, 1e-12));
-        assert_eq!(arc_length(3.0, 0.0), 3.0);
-        assert!(close(arc_length(3.0, 1e-14), 3.0, 1e-12));
-    }
 }

@@ -4,8 +4,10 @@ use cavalier_contours::polyline::{PlineContainsResult, PlineSource, Polyline};
 use serde::{Deserialize, Serialize};
 use sv_geom::planar::segment_distance;
 
+use sv_geom::{Contour, Segment};
+
 use crate::params::MIN_INSIDE_RADIUS;
-use crate::{Contour, FlatStrip, ProfileParams, StripProfile};
+use crate::{FlatStrip, ProfileParams, StripProfile};
 
 /// Chord tolerance used to flatten arcs for distance measurements (mm). 0.005 mm is far
 /// below what a plasma resolves, so a measured web is exact to the cutter.
@@ -59,35 +61,6 @@ impl std::fmt::Display for Violation {
     }
 }
 
-/// Sample a contour into a closed point list (arcs flattened to `tol`).
-pub(crate) fn flatten(c: &Contour, tol: f64) -> Vec<[f64; 2]> {
-    let n = c.0.len();
-    let mut out = Vec::with_capacity(n * 2);
-    for i in 0..n {
-        let [x0, y0, b] = c.0[i];
-        let [x1, y1, _] = c.0[(i + 1) % n];
-        out.push([x0, y0]);
-        if b.abs() > 1e-12 {
-            let sweep = 4.0 * b.atan();
-            let chord = ((x1 - x0).powi(2) + (y1 - y0).powi(2)).sqrt();
-            let radius = chord / (2.0 * (sweep / 2.0).sin().abs());
-            let step = 2.0 * (1.0 - (tol / radius).min(1.0)).acos();
-            let k = ((sweep.abs() / step.max(1e-3)).ceil() as usize).clamp(1, 512);
-            // centre: on the left of the chord for counter-clockwise arcs
-            let (mx, my) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-            let (ux, uy) = ((x1 - x0) / chord, (y1 - y0) / chord);
-            let h = (chord / 2.0) / (sweep / 2.0).tan();
-            let (cx, cy) = (mx - uy * h, my + ux * h);
-            let a0 = (y0 - cy).atan2(x0 - cx);
-            for j in 1..k {
-                let a = a0 + sweep * j as f64 / k as f64;
-                out.push([cx + radius * a.cos(), cy + radius * a.sin()]);
-            }
-        }
-    }
-    out
-}
-
 fn bounds(p: &[[f64; 2]]) -> [f64; 4] {
     p.iter()
         .fold([f64::MAX, f64::MAX, f64::MIN, f64::MIN], |b, q| {
@@ -137,41 +110,31 @@ fn distance(a: &[[f64; 2]], b: &[[f64; 2]], reach: f64) -> (f64, [f64; 2]) {
 /// below `min_radius`; returns (radius, position) of the worst one. Also counts the
 /// half-circle (or larger) arcs of diameter >= `end_diameter`.
 fn corners(c: &Contour, min_radius: f64, end_diameter: f64) -> (Option<(f64, [f64; 2])>, usize) {
-    let n = c.0.len();
+    let segments: Vec<Segment> = c.segments().collect();
+    let n = segments.len();
     let mut worst: Option<(f64, [f64; 2])> = None;
     let mut ends = 0;
-    let tangent = |i: usize, at_end: bool| {
-        let [x0, y0, b] = c.0[i];
-        let [x1, y1, _] = c.0[(i + 1) % n];
-        let a = (y1 - y0).atan2(x1 - x0);
-        let half = 2.0 * b.atan();
-        if at_end {
-            a + half
-        } else {
-            a - half
-        }
-    };
-    for i in 0..n {
-        let [x0, y0, b] = c.0[i];
-        let [x1, y1, _] = c.0[(i + 1) % n];
-        let chord = ((x1 - x0).powi(2) + (y1 - y0).powi(2)).sqrt();
-        if b.abs() > 1e-9 {
-            let sweep = 4.0 * b.atan();
-            let radius = chord / (2.0 * (sweep / 2.0).sin().abs());
-            if b < 0.0 && radius < min_radius - 1e-9 && worst.is_none_or(|w| radius < w.0) {
-                worst = Some((radius, [x0, y0]));
-            }
-            if sweep.abs() >= std::f64::consts::PI - 1e-6 && 2.0 * radius >= end_diameter - 1e-9 {
-                ends += 1;
+    for (i, s) in segments.iter().enumerate() {
+        if s.bulge.abs() > 1e-9 {
+            if let Some((radius, _)) = s.arc() {
+                if s.bulge < 0.0 && radius < min_radius - 1e-9 && worst.is_none_or(|w| radius < w.0)
+                {
+                    worst = Some((radius, s.start));
+                }
+                if s.sweep().abs() >= std::f64::consts::PI - 1e-6
+                    && 2.0 * radius >= end_diameter - 1e-9
+                {
+                    ends += 1;
+                }
             }
         }
         // turn at the start of segment i
-        let tin = tangent((i + n - 1) % n, true);
-        let tout = tangent(i, false);
+        let tin = segments[(i + n - 1) % n].tangent_angles().1;
+        let tout = s.tangent_angles().0;
         let turn = (tout - tin + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
             - std::f64::consts::PI;
         if turn < -1e-6 && worst.is_none_or(|w| w.0 > 0.0) {
-            worst = Some((0.0, [x0, y0]));
+            worst = Some((0.0, s.start));
         }
     }
     (worst, ends)
@@ -196,7 +159,7 @@ pub fn check_profile(
         at,
     };
     let outline = profile.outline.to_pline();
-    let first = |c: &Contour| c.0.first().map(|p| [p[0], p[1]]).unwrap_or([0.0, 0.0]);
+    let first = |c: &Contour| c.vertices.first().map_or([0.0, 0.0], |v| v.point());
     let simple =
         |p: &Polyline<f64>| p.is_closed() && p.vertex_count() >= 2 && !p.scan_for_self_intersect();
     if !simple(&outline) {
@@ -211,11 +174,11 @@ pub fn check_profile(
     if let (Some((r, at)), _) = corners(&profile.outline, MIN_INSIDE_RADIUS, 0.0) {
         out.push(v(None, DrcRule::InsideRadius, r, MIN_INSIDE_RADIUS, at));
     }
-    let flat_outline = flatten(&profile.outline, DRC_ARC_TOLERANCE);
+    let flat_outline = profile.outline.flatten(DRC_ARC_TOLERANCE);
     let flat_cuts: Vec<Vec<[f64; 2]>> = profile
         .cuts
         .iter()
-        .map(|c| flatten(c, DRC_ARC_TOLERANCE))
+        .map(|c| c.flatten(DRC_ARC_TOLERANCE))
         .collect();
     let boxes: Vec<[f64; 4]> = flat_cuts.iter().map(|c| bounds(c)).collect();
     for (ci, cut) in profile.cuts.iter().enumerate() {

@@ -47,13 +47,11 @@ pub use params::{
     DEFAULT_SHEET_MARGIN, MIN_INSIDE_RADIUS,
 };
 pub use plane::convex_intersection_area;
-pub use profile::{profile_strip, Contour, Label, StripProfile};
+pub use profile::{profile_strip, Label, StripProfile};
 pub use strip::{
     apply_labels, chains, strip_id, unit_labels, unroll, unroll_tiles, FlatStrip, Pin, UnitLabel,
 };
+/// The contours of a profile: the workspace's one arc contour (outlines counter-clockwise,
+/// cuts clockwise, so the material is on the left).
+pub use sv_geom::Contour;
 pub use tiles::TileSet;
-
-/// Flatten a contour's arcs into points within `tolerance` (mm), for drawing and checks.
-pub fn flatten_contour(contour: &Contour, tolerance: f64) -> Vec<[f64; 2]> {
-    drc::flatten(contour, tolerance)
-}

@@ -4,36 +4,10 @@ use cavalier_contours::polyline::{
     BooleanOp, PlineCreation, PlineSource, PlineSourceMut, PlineVertex, Polyline,
 };
 use serde::{Deserialize, Serialize};
-use sv_geom::{Point2, Vector2};
+use sv_geom::{Contour, Point2, Vector2};
 
 use crate::plane::cross;
 use crate::{FlatStrip, ProfileParams, StripsError};
-
-/// A closed contour: vertices `[x, y, bulge]` (mm), the bulge `tan(sweep / 4)` of the arc
-/// from this vertex to the next (0 for a straight segment, positive counter-clockwise).
-/// Outlines run counter-clockwise and cuts clockwise, so the material is always on the left.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(transparent)]
-pub struct Contour(pub Vec<[f64; 3]>);
-
-impl Contour {
-    pub(crate) fn from_pline(p: &Polyline<f64>) -> Self {
-        Self(p.iter_vertexes().map(|v| [v.x, v.y, v.bulge]).collect())
-    }
-
-    pub(crate) fn to_pline(&self) -> Polyline<f64> {
-        let mut p = Polyline::with_capacity(self.0.len(), true);
-        for v in &self.0 {
-            p.add(v[0], v[1], v[2]);
-        }
-        p
-    }
-
-    /// Signed area (mm^2, positive counter-clockwise), arcs included.
-    pub fn signed_area(&self) -> f64 {
-        self.to_pline().area()
-    }
-}
 
 /// A text to etch: centred at `at`, baseline along `angle` (rad), cap height `height` (mm).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

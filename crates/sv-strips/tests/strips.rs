@@ -355,13 +355,13 @@ fn the_design_rule_check_catches_a_thin_web() {
     let mut p = profile_strip(&strips[0], &names, &params).unwrap();
     // move the first cut toward the second one by most of the web between them
     let shift = {
-        let a = &p.cuts[0].0[0];
-        let b = &p.cuts[1].0[0];
-        [b[0] - a[0], b[1] - a[1]]
+        let a = &p.cuts[0].vertices[0];
+        let b = &p.cuts[1].vertices[0];
+        [b.x - a.x, b.y - a.y]
     };
-    for v in &mut p.cuts[0].0 {
-        v[0] += shift[0] * 0.97;
-        v[1] += shift[1] * 0.97;
+    for v in &mut p.cuts[0].vertices {
+        v.x += shift[0] * 0.97;
+        v.y += shift[1] * 0.97;
     }
     let v = check_profile(&strips[0], &p, &params);
     assert!(
@@ -371,8 +371,8 @@ fn the_design_rule_check_catches_a_thin_web() {
     );
     // a slot end made square is caught
     let mut p = profile_strip(&strips[0], &names, &params).unwrap();
-    for v in &mut p.cuts[2].0 {
-        v[2] = 0.0;
+    for v in &mut p.cuts[2].vertices {
+        v.bulge = 0.0;
     }
     let v = check_profile(&strips[0], &p, &params);
     assert!(

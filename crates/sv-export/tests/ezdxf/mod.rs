@@ -57,11 +57,21 @@ pub fn venv_python() -> PathBuf {
 /// Run `audit_dxf.py` (ezdxf's auditor plus the shop conventions; `sheets`: the files are
 /// nested sheets) over `files`, panicking with its report unless every file is clean.
 pub fn audit(files: &[PathBuf], sheets: bool) -> String {
+    audit_as(files, if sheets { Some("--sheets") } else { None })
+}
+
+/// Like [`audit`] for sheets of any parts (maybe nothing etched, maybe no arcs).
+#[allow(dead_code)]
+pub fn audit_foreign_sheets(files: &[PathBuf]) -> String {
+    audit_as(files, Some("--foreign-sheets"))
+}
+
+fn audit_as(files: &[PathBuf], mode: Option<&str>) -> String {
     let script = crates_dir().join("sv-export/tests/audit_dxf.py");
     let mut cmd = Command::new(venv_python());
     cmd.arg(script);
-    if sheets {
-        cmd.arg("--sheets");
+    if let Some(m) = mode {
+        cmd.arg(m);
     }
     let out = cmd.args(files).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout).into_owned();

@@ -1,26 +1,14 @@
-//! DXF ASCII R2000 (AC1015) writer shared by the strip drawings and the nested sheets:
-//! `$INSUNITS` = 4 (mm), one closed LWPOLYLINE with bulges per contour (nominal shape; the
-//! CAM applies kerf compensation, lead-ins and cut order), single-stroke etching, and an
-//! INFO layer that is never cut.
-//!
-//! Layers: `OUTSIDE` (part outlines), `INSIDE` (slots), `ETCH` (labels, fold marks, as
-//! open LWPOLYLINEs), `INFO` (nominal flat tiles, pins, titles, sheet outline, pierce
-//! points; not plotted).
+//! The DXF writer: ASCII R2000 (AC1015), `$INSUNITS` = 4 (mm), a complete skeleton
+//! (HEADER, CLASSES, TABLES, BLOCKS, ENTITIES, OBJECTS with handles and owners, so that
+//! ezdxf's auditor has nothing to fix), the shop layers, and entities in the order they are
+//! added (a CAM cuts in file order unless told otherwise): closed LWPOLYLINEs with bulges
+//! (arcs stay arcs), open LWPOLYLINEs, POINTs and TEXT.
 
 use std::fmt::Write;
 
-use sv_strips::{FlatStrip, StripProfile};
+use sv_geom::Contour;
 
-use crate::font::text_strokes;
-
-/// Layer of the part outline.
-pub const LAYER_OUTSIDE: &str = "OUTSIDE";
-/// Layer of the inside cuts.
-pub const LAYER_INSIDE: &str = "INSIDE";
-/// Layer of etched labels and fold marks.
-pub const LAYER_ETCH: &str = "ETCH";
-/// Layer of information that is never cut.
-pub const LAYER_INFO: &str = "INFO";
+use crate::{LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
 
 /// Group-code writer with a handle counter.
 struct Out {
@@ -99,18 +87,47 @@ fn record_head(o: &mut Out, kind: &str, owner: &str, subclass: &str) -> String {
 /// The ENTITIES of one drawing, written in the order they are added (the CAM cuts in
 /// file order unless told otherwise), then wrapped in a complete R2000 file by [`finish`].
 ///
+/// ```
+/// use sv_dxf::{Drawing, LAYER_OUTSIDE};
+/// let mut d = Drawing::new();
+/// d.contour(LAYER_OUTSIDE, &sv_geom::Contour::circle(0.0, 0.0, 10.0));
+/// let text = d.finish();
+/// assert!(text.contains("AC1015") && text.ends_with("EOF\n"));
+/// // the header extents hold the circle
+/// assert!(text.contains("$EXTMIN\n 10\n-10.000000000\n 20\n-10.000000000"));
+/// ```
+///
 /// [`finish`]: Drawing::finish
-pub(crate) struct Drawing {
+pub struct Drawing {
     body: Out,
+    /// the extents of everything drawn so far
+    lo: [f64; 2],
+    hi: [f64; 2],
+}
+
+impl Default for Drawing {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Drawing {
-    pub(crate) fn new() -> Self {
+    /// An empty drawing.
+    pub fn new() -> Self {
         Self {
             body: Out {
                 s: String::new(),
                 next: FIRST_FREE,
             },
+            lo: [f64::INFINITY; 2],
+            hi: [f64::NEG_INFINITY; 2],
+        }
+    }
+
+    fn grow(&mut self, p: [f64; 2]) {
+        for k in 0..2 {
+            self.lo[k] = self.lo[k].min(p[k]);
+            self.hi[k] = self.hi[k].max(p[k]);
         }
     }
 
@@ -126,7 +143,12 @@ impl Drawing {
     }
 
     /// An LWPOLYLINE through `points` (`[x, y, bulge of the segment leaving the point]`).
-    pub(crate) fn polyline(&mut self, layer: &str, points: &[[f64; 3]], closed: bool) {
+    fn polyline(
+        &mut self,
+        layer: &str,
+        points: impl ExactSizeIterator<Item = [f64; 3]>,
+        closed: bool,
+    ) {
         self.entity("LWPOLYLINE", layer, "AcDbPolyline");
         let o = &mut self.body;
         o.pair(90, points.len());
@@ -141,27 +163,43 @@ impl Drawing {
         }
     }
 
+    /// A closed LWPOLYLINE with bulges: the contour as it is (same vertices, same
+    /// direction; arcs stay arcs).
+    pub fn contour(&mut self, layer: &str, contour: &Contour) {
+        if let Some((lo, hi)) = contour.bounds() {
+            self.grow(lo);
+            self.grow(hi);
+        }
+        self.polyline(layer, contour.vertices.iter().map(|&v| v.into()), true);
+    }
+
     /// An open polyline of straight segments.
-    pub(crate) fn open_line(&mut self, layer: &str, pts: &[[f64; 2]]) {
-        let v: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], 0.0]).collect();
-        self.polyline(layer, &v, false);
+    pub fn open_line(&mut self, layer: &str, pts: &[[f64; 2]]) {
+        pts.iter().for_each(|&p| self.grow(p));
+        self.polyline(layer, pts.iter().map(|p| [p[0], p[1], 0.0]), false);
     }
 
     /// A closed polygon of straight segments.
-    pub(crate) fn polygon(&mut self, layer: &str, pts: &[[f64; 2]]) {
-        let v: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], 0.0]).collect();
-        self.polyline(layer, &v, true);
+    pub fn polygon(&mut self, layer: &str, pts: &[[f64; 2]]) {
+        pts.iter().for_each(|&p| self.grow(p));
+        self.polyline(layer, pts.iter().map(|p| [p[0], p[1], 0.0]), true);
     }
 
-    /// Etched single-stroke text centred on `at`.
-    pub(crate) fn strokes(&mut self, layer: &str, text: &str, at: [f64; 2], angle: f64, h: f64) {
-        for s in text_strokes(text, at, angle, h) {
-            self.open_line(layer, &s);
-        }
+    /// The box a TEXT of `height` at `at` may cover in a CAD program's font: one cap
+    /// height per character wide (wider than any usual font), a third below the baseline.
+    pub fn text_box(text: &str, at: [f64; 2], height: f64) -> ([f64; 2], [f64; 2]) {
+        let width = height * text.chars().count() as f64;
+        (
+            [at[0], at[1] - height / 3.0],
+            [at[0] + width, at[1] + 1.25 * height],
+        )
     }
 
     /// A TEXT entity (style Standard) with its baseline starting at `at`, for people.
-    pub(crate) fn text(&mut self, layer: &str, text: &str, at: [f64; 2], height: f64) {
+    pub fn text(&mut self, layer: &str, text: &str, at: [f64; 2], height: f64) {
+        let (lo, hi) = Self::text_box(text, at, height);
+        self.grow(lo);
+        self.grow(hi);
         self.entity("TEXT", layer, "AcDbText");
         let o = &mut self.body;
         o.real(10, at[0]);
@@ -174,7 +212,8 @@ impl Drawing {
     }
 
     /// A POINT entity.
-    pub(crate) fn point(&mut self, layer: &str, at: [f64; 2]) {
+    pub fn point(&mut self, layer: &str, at: [f64; 2]) {
+        self.grow(at);
         self.entity("POINT", layer, "AcDbPoint");
         let o = &mut self.body;
         o.real(10, at[0]);
@@ -182,8 +221,13 @@ impl Drawing {
         o.real(30, 0.0);
     }
 
-    /// The complete DXF file; `ext_min`/`ext_max` are the drawing extents (mm).
-    pub(crate) fn finish(self, ext_min: [f64; 2], ext_max: [f64; 2]) -> String {
+    /// The complete DXF file, its header extents holding everything drawn.
+    pub fn finish(self) -> String {
+        let (ext_min, ext_max) = if self.lo[0] <= self.hi[0] {
+            (self.lo, self.hi)
+        } else {
+            ([0.0; 2], [0.0; 2])
+        };
         let entities = self.body.s;
         let seed = self.body.next;
         let mut o = Out {
@@ -429,53 +473,4 @@ impl Drawing {
         o.pair(0, "EOF");
         o.s
     }
-}
-
-/// The DXF text of one profiled strip.
-pub fn strip_dxf(strip: &FlatStrip, profile: &StripProfile) -> String {
-    let mut d = Drawing::new();
-    d.polyline(LAYER_OUTSIDE, &profile.outline.0, true);
-    for c in &profile.cuts {
-        d.polyline(LAYER_INSIDE, &c.0, true);
-    }
-    for s in etch_strokes(profile) {
-        d.open_line(LAYER_ETCH, &s);
-    }
-    for t in &profile.tiles {
-        d.polygon(LAYER_INFO, t);
-    }
-    for pin in &strip.pins {
-        let (x, y, r) = (pin.point.x, pin.point.y, 3.0);
-        d.open_line(LAYER_INFO, &[[x - r, y], [x + r, y]]);
-        d.open_line(LAYER_INFO, &[[x, y - r], [x, y + r]]);
-    }
-    let title = format!("{} {:.0}X{:.0}", strip.id, strip.size[0], strip.size[1]);
-    d.strokes(LAYER_INFO, &title, [strip.size[0] / 2.0, -30.0], 0.0, 15.0);
-    let (ext_min, ext_max) = extents(profile);
-    d.finish(ext_min, ext_max)
-}
-
-/// What a strip etches (labels and fold marks), as open polylines in the strip's frame.
-pub fn etch_strokes(profile: &StripProfile) -> Vec<Vec<[f64; 2]>> {
-    let mut out: Vec<Vec<[f64; 2]>> = profile
-        .labels
-        .iter()
-        .flat_map(|l| text_strokes(&l.text, l.at, l.angle, l.height))
-        .collect();
-    out.extend(profile.fold_marks.iter().map(|f| f.to_vec()));
-    out
-}
-
-fn extents(p: &StripProfile) -> ([f64; 2], [f64; 2]) {
-    let mut a = [f64::MAX, f64::MAX];
-    let mut b = [f64::MIN, f64::MIN];
-    for v in &p.outline.0 {
-        a = [a[0].min(v[0]), a[1].min(v[1])];
-        b = [b[0].max(v[0]), b[1].max(v[1])];
-    }
-    if a[0] > b[0] {
-        return ([0.0, 0.0], [0.0, 0.0]);
-    }
-    // arcs may bulge past their vertices by at most the fillet; leave room for the title
-    ([a[0] - 10.0, a[1] - 50.0], [b[0] + 10.0, b[1] + 10.0])
 }

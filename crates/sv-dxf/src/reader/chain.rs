@@ -1,0 +1,783 @@
+//! Open segments (LINE, ARC, open polylines, fitted curves) into closed contours: repeated
+//! and overlapping segments merged, ends within the join tolerance joined, dangling runs
+//! reported as open contours, and where lines meet a contour inside it (bend lines drawn
+//! on a cut layer, a title block's grid) the contour is the outer boundary and those lines
+//! are reported, not chained through.
+
+use std::collections::HashMap;
+
+use sv_geom::{Contour, Segment, Vertex};
+
+use super::source::{Closed, Cut, Piece};
+
+/// A contour made of pieces.
+pub(crate) struct Chained {
+    pub(crate) contour: Contour,
+    pub(crate) srcs: Vec<usize>,
+    pub(crate) cut: Cut,
+}
+
+/// A run of pieces that does not close.
+pub(crate) struct Open {
+    pub(crate) srcs: Vec<usize>,
+    /// its loose ends
+    pub(crate) loose: Vec<[f64; 2]>,
+}
+
+/// What the chaining did besides chaining: `(sources, what)`.
+pub(crate) type Repair = (Vec<usize>, String);
+
+#[derive(Default)]
+pub(crate) struct Chains {
+    pub(crate) contours: Vec<Chained>,
+    pub(crate) open: Vec<Open>,
+    pub(crate) repairs: Vec<Repair>,
+}
+
+/// A uniform grid over boxes, for neighbour queries.
+struct Grid {
+    cell: f64,
+    map: HashMap<(i64, i64), Vec<usize>>,
+}
+
+impl Grid {
+    fn new(cell: f64) -> Self {
+        Self {
+            cell: cell.max(1e-9),
+            map: HashMap::new(),
+        }
+    }
+
+    fn range(&self, lo: [f64; 2], hi: [f64; 2]) -> (i64, i64, i64, i64) {
+        let c = |v: f64| (v / self.cell).floor() as i64;
+        (c(lo[0]), c(lo[1]), c(hi[0]), c(hi[1]))
+    }
+
+    fn insert(&mut self, i: usize, lo: [f64; 2], hi: [f64; 2]) {
+        let (x0, y0, x1, y1) = self.range(lo, hi);
+        // a huge box (a border line) goes into a bounded number of cells per axis
+        for x in x0..=x1.min(x0 + 4096) {
+            for y in y0..=y1.min(y0 + 4096) {
+                self.map.entry((x, y)).or_default().push(i);
+            }
+        }
+    }
+
+    fn near(&self, lo: [f64; 2], hi: [f64; 2]) -> Vec<usize> {
+        let (x0, y0, x1, y1) = self.range(lo, hi);
+        let mut out = Vec::new();
+        for x in x0..=x1.min(x0 + 4096) {
+            for y in y0..=y1.min(y0 + 4096) {
+                if let Some(v) = self.map.get(&(x, y)) {
+                    out.extend_from_slice(v);
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+}
+
+fn find(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
+fn union(parent: &mut [usize], a: usize, b: usize) {
+    let (ra, rb) = (find(parent, a), find(parent, b));
+    if ra != rb {
+        parent[ra.max(rb)] = ra.min(rb);
+    }
+}
+
+fn bounds(s: &Segment) -> ([f64; 2], [f64; 2]) {
+    let c = Contour::new(vec![
+        Vertex::new(s.start[0], s.start[1], s.bulge),
+        Vertex::line(s.end[0], s.end[1]),
+    ]);
+    // a two-vertex contour: the arc there and the chord back, whose box is the arc's
+    c.bounds().unwrap_or((s.start, s.start))
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// A segment's carrier: the line (origin, unit direction) or the circle (centre, radius).
+enum Carrier {
+    Line([f64; 2], [f64; 2]),
+    Circle([f64; 2], f64),
+}
+
+fn carrier(s: &Segment) -> Carrier {
+    match s.arc() {
+        Some((r, c)) => Carrier::Circle(c, r),
+        None => {
+            let l = s.chord().max(1e-300);
+            Carrier::Line(
+                s.start,
+                [(s.end[0] - s.start[0]) / l, (s.end[1] - s.start[1]) / l],
+            )
+        }
+    }
+}
+
+/// The parameter interval of `s` on `carrier` (line: distance along it; circle: angle,
+/// counter-clockwise, starting in `[0, 2 pi)`), if `s` lies on the carrier within `tol`.
+fn interval(c: &Carrier, s: &Segment, tol: f64) -> Option<(f64, f64)> {
+    match (c, s.arc()) {
+        (Carrier::Line(o, u), None) => {
+            let off = |p: [f64; 2]| ((p[0] - o[0]) * u[1] - (p[1] - o[1]) * u[0]).abs();
+            if off(s.start) > tol || off(s.end) > tol {
+                return None;
+            }
+            let t = |p: [f64; 2]| (p[0] - o[0]) * u[0] + (p[1] - o[1]) * u[1];
+            let (a, b) = (t(s.start), t(s.end));
+            Some((a.min(b), a.max(b)))
+        }
+        (Carrier::Circle(c, r), Some((r2, c2))) => {
+            if dist(*c, c2) > tol || (r - r2).abs() > tol {
+                return None;
+            }
+            let ang = |p: [f64; 2]| {
+                (p[1] - c[1])
+                    .atan2(p[0] - c[0])
+                    .rem_euclid(std::f64::consts::TAU)
+            };
+            let (from, sweep) = if s.bulge > 0.0 {
+                (ang(s.start), s.sweep())
+            } else {
+                (ang(s.end), -s.sweep())
+            };
+            Some((from, from + sweep))
+        }
+        _ => None,
+    }
+}
+
+/// Whether two segments share more than a point (one repeats part of the other).
+fn overlap(a: &Segment, b: &Segment, tol: f64) -> bool {
+    let ca = carrier(if a.length() >= b.length() { a } else { b });
+    let (Some(ia), Some(ib)) = (interval(&ca, a, tol), interval(&ca, b, tol)) else {
+        return false;
+    };
+    let scale = match ca {
+        Carrier::Line(..) => 1.0,
+        Carrier::Circle(_, r) => r.max(1e-9),
+    };
+    let period = if matches!(ca, Carrier::Circle(..)) {
+        std::f64::consts::TAU
+    } else {
+        0.0
+    };
+    [-period, 0.0, period].iter().any(|&shift| {
+        let (lo, hi) = (ia.0.max(ib.0 + shift), ia.1.min(ib.1 + shift));
+        (hi - lo) * scale > tol
+    })
+}
+
+/// Merges groups of overlapping pieces into the pieces of their union, split where the
+/// members ended (so the rest still joins there).
+fn merge_overlaps(pieces: Vec<Piece>, tol: f64, repairs: &mut Vec<Repair>) -> Vec<Piece> {
+    let n = pieces.len();
+    let boxes: Vec<([f64; 2], [f64; 2])> = pieces.iter().map(|p| bounds(&p.seg)).collect();
+    let cell = {
+        let total: f64 = boxes.iter().map(|(lo, hi)| dist(*lo, *hi)).sum();
+        (total / n.max(1) as f64).max(tol * 4.0)
+    };
+    let mut grid = Grid::new(cell);
+    for (i, (lo, hi)) in boxes.iter().enumerate() {
+        grid.insert(i, *lo, *hi);
+    }
+    let mut parent: Vec<usize> = (0..n).collect();
+    for i in 0..n {
+        let (lo, hi) = boxes[i];
+        for j in grid.near([lo[0] - tol, lo[1] - tol], [hi[0] + tol, hi[1] + tol]) {
+            if j > i && overlap(&pieces[i].seg, &pieces[j].seg, tol) {
+                union(&mut parent, i, j);
+            }
+        }
+    }
+    let mut groups: HashMap<usize, Vec<usize>> = HashMap::new();
+    for i in 0..n {
+        let r = find(&mut parent, i);
+        groups.entry(r).or_default().push(i);
+    }
+    let mut keys: Vec<usize> = groups.keys().copied().collect();
+    keys.sort_unstable();
+    let mut out = Vec::with_capacity(n);
+    for k in keys {
+        let members = &groups[&k];
+        if members.len() == 1 {
+            out.push(pieces[members[0]]);
+            continue;
+        }
+        let longest = *members
+            .iter()
+            .max_by(|&&a, &&b| {
+                pieces[a]
+                    .seg
+                    .length()
+                    .total_cmp(&pieces[b].seg.length())
+                    .then(b.cmp(&a))
+            })
+            .unwrap_or(&members[0]);
+        let c = carrier(&pieces[longest].seg);
+        let cut = members
+            .iter()
+            .map(|&m| pieces[m].cut)
+            .min()
+            .unwrap_or(Cut::Either);
+        let src = pieces[longest].src;
+        let mut iv: Vec<(f64, f64)> = members
+            .iter()
+            .filter_map(|&m| interval(&c, &pieces[m].seg, tol))
+            .collect();
+        let mut breaks: Vec<f64> = iv.iter().flat_map(|&(a, b)| [a, b]).collect();
+        if let Carrier::Circle(..) = c {
+            // unwrap the angles onto the longest member's turn
+            let base = interval(&c, &pieces[longest].seg, tol).map_or(0.0, |i| i.0);
+            for i in iv.iter_mut() {
+                while i.0 < base - 1e-12 {
+                    i.0 += std::f64::consts::TAU;
+                    i.1 += std::f64::consts::TAU;
+                }
+            }
+            breaks = iv.iter().flat_map(|&(a, b)| [a, b]).collect();
+        }
+        iv.sort_by(|a, b| a.0.total_cmp(&b.0));
+        breaks.sort_by(f64::total_cmp);
+        let scale = match c {
+            Carrier::Line(..) => 1.0,
+            Carrier::Circle(_, r) => r.max(1e-9),
+        };
+        let mut union_iv: Vec<(f64, f64)> = Vec::new();
+        for (a, b) in iv {
+            match union_iv.last_mut() {
+                Some(last) if a <= last.1 + tol / scale => last.1 = last.1.max(b),
+                _ => union_iv.push((a, b)),
+            }
+        }
+        let member_length: f64 = members.iter().map(|&m| pieces[m].seg.length()).sum();
+        let union_length: f64 = union_iv.iter().map(|(a, b)| (b - a) * scale).sum();
+        if member_length > union_length + tol {
+            repairs.push((
+                members.iter().map(|&m| pieces[m].src).collect(),
+                format!(
+                    "repeated or overlapping segments merged ({:.3} mm drawn twice)",
+                    member_length - union_length
+                ),
+            ));
+        }
+        let point = |t: f64| match c {
+            Carrier::Line(o, u) => [o[0] + t * u[0], o[1] + t * u[1]],
+            Carrier::Circle(cc, r) => [cc[0] + r * t.cos(), cc[1] + r * t.sin()],
+        };
+        for (a, b) in union_iv {
+            let mut ts: Vec<f64> = vec![a];
+            ts.extend(
+                breaks
+                    .iter()
+                    .copied()
+                    .filter(|&t| t > a + tol / scale && t < b - tol / scale),
+            );
+            ts.push(b);
+            ts.dedup_by(|x, y| (*x - *y).abs() * scale <= tol);
+            for w in ts.windows(2) {
+                let bulge = match c {
+                    Carrier::Line(..) => 0.0,
+                    Carrier::Circle(..) => ((w[1] - w[0]) / 4.0).tan(),
+                };
+                if let Carrier::Circle(..) = c {
+                    // a full circle in at most quarter turns
+                    let k = ((w[1] - w[0]) / std::f64::consts::FRAC_PI_2)
+                        .ceil()
+                        .max(1.0) as usize;
+                    for j in 0..k {
+                        let (s, e) = (
+                            w[0] + (w[1] - w[0]) * j as f64 / k as f64,
+                            w[0] + (w[1] - w[0]) * (j + 1) as f64 / k as f64,
+                        );
+                        out.push(Piece {
+                            seg: Segment {
+                                start: point(s),
+                                end: point(e),
+                                bulge: ((e - s) / 4.0).tan(),
+                            },
+                            src,
+                            cut,
+                        });
+                    }
+                    continue;
+                }
+                out.push(Piece {
+                    seg: Segment {
+                        start: point(w[0]),
+                        end: point(w[1]),
+                        bulge,
+                    },
+                    src,
+                    cut,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Pieces that repeat a segment of a closed contour drawn as one entity are dropped.
+fn drop_covered(
+    pieces: Vec<Piece>,
+    closed: &[Closed],
+    tol: f64,
+    repairs: &mut Vec<Repair>,
+) -> Vec<Piece> {
+    if closed.is_empty() || pieces.is_empty() {
+        return pieces;
+    }
+    let segs: Vec<(Segment, usize)> = closed
+        .iter()
+        .flat_map(|c| c.contour.segments().map(move |s| (s, c.src)))
+        .collect();
+    let boxes: Vec<([f64; 2], [f64; 2])> = segs.iter().map(|(s, _)| bounds(s)).collect();
+    let cell = (boxes.iter().map(|(lo, hi)| dist(*lo, *hi)).sum::<f64>() / boxes.len() as f64)
+        .max(tol * 4.0);
+    let mut grid = Grid::new(cell);
+    for (i, (lo, hi)) in boxes.iter().enumerate() {
+        grid.insert(i, *lo, *hi);
+    }
+    let mut out = Vec::with_capacity(pieces.len());
+    for p in pieces {
+        let (lo, hi) = bounds(&p.seg);
+        let covered = grid
+            .near([lo[0] - tol, lo[1] - tol], [hi[0] + tol, hi[1] + tol])
+            .into_iter()
+            .find(|&j| {
+                let c = carrier(&segs[j].0);
+                match (interval(&c, &segs[j].0, tol), interval(&c, &p.seg, tol)) {
+                    (Some(a), Some(b)) => {
+                        let period = if matches!(c, Carrier::Circle(..)) {
+                            std::f64::consts::TAU
+                        } else {
+                            0.0
+                        };
+                        let scale = match c {
+                            Carrier::Line(..) => 1.0,
+                            Carrier::Circle(_, r) => r,
+                        };
+                        [-period, 0.0, period].iter().any(|&sh| {
+                            b.0 + sh >= a.0 - tol / scale && b.1 + sh <= a.1 + tol / scale
+                        })
+                    }
+                    _ => false,
+                }
+            });
+        match covered {
+            Some(j) => repairs.push((
+                vec![p.src, segs[j].1],
+                "repeats a closed contour drawn as one entity: dropped".into(),
+            )),
+            None => out.push(p),
+        }
+    }
+    out
+}
+
+/// A half-edge: edge `e` run forward (`fwd`) or back.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+struct Half {
+    e: usize,
+    fwd: bool,
+}
+
+struct Graph {
+    nodes: Vec<[f64; 2]>,
+    /// edge: (from node, to node, segment from -> to, piece)
+    edges: Vec<(usize, usize, Segment, usize)>,
+}
+
+impl Graph {
+    fn seg(&self, h: Half) -> Segment {
+        let s = self.edges[h.e].2;
+        if h.fwd {
+            s
+        } else {
+            s.reversed()
+        }
+    }
+
+    fn from(&self, h: Half) -> usize {
+        if h.fwd {
+            self.edges[h.e].0
+        } else {
+            self.edges[h.e].1
+        }
+    }
+
+    fn to(&self, h: Half) -> usize {
+        if h.fwd {
+            self.edges[h.e].1
+        } else {
+            self.edges[h.e].0
+        }
+    }
+}
+
+/// Chains `pieces` into contours (see the module doc).
+pub(crate) fn chain(pieces: Vec<Piece>, closed: &[Closed], tol: f64) -> Chains {
+    let mut chains = Chains::default();
+    let pieces = drop_covered(pieces, closed, tol, &mut chains.repairs);
+    let pieces = merge_overlaps(pieces, tol, &mut chains.repairs);
+    if pieces.is_empty() {
+        return chains;
+    }
+    // nodes: ends within the tolerance of each other
+    let ends: Vec<[f64; 2]> = pieces
+        .iter()
+        .flat_map(|p| [p.seg.start, p.seg.end])
+        .collect();
+    let mut grid = Grid::new(tol);
+    for (i, p) in ends.iter().enumerate() {
+        grid.insert(i, *p, *p);
+    }
+    let mut parent: Vec<usize> = (0..ends.len()).collect();
+    for (i, p) in ends.iter().enumerate() {
+        for j in grid.near([p[0] - tol, p[1] - tol], [p[0] + tol, p[1] + tol]) {
+            if j > i && dist(*p, ends[j]) <= tol {
+                union(&mut parent, i, j);
+            }
+        }
+    }
+    let mut node_of: HashMap<usize, usize> = HashMap::new();
+    let mut members: Vec<Vec<usize>> = Vec::new();
+    let mut end_node = vec![0; ends.len()];
+    for i in 0..ends.len() {
+        let r = find(&mut parent, i);
+        let k = *node_of.entry(r).or_insert_with(|| {
+            members.push(Vec::new());
+            members.len() - 1
+        });
+        members[k].push(i);
+        end_node[i] = k;
+    }
+    let nodes: Vec<[f64; 2]> = members
+        .iter()
+        .map(|m| {
+            // an end of the file's own precision stays put; a gap closes at its middle
+            let n = m.len() as f64;
+            let (x, y) = m.iter().fold((0.0, 0.0), |(x, y), &i| {
+                (x + ends[i][0] / n, y + ends[i][1] / n)
+            });
+            [x, y]
+        })
+        .collect();
+    for (k, m) in members.iter().enumerate() {
+        let spread = m
+            .iter()
+            .flat_map(|&a| m.iter().map(move |&b| (a, b)))
+            .map(|(a, b)| dist(ends[a], ends[b]))
+            .fold(0.0, f64::max);
+        if spread > 1e-6 {
+            let mut srcs: Vec<usize> = m.iter().map(|&i| pieces[i / 2].src).collect();
+            srcs.sort_unstable();
+            srcs.dedup();
+            chains.repairs.push((
+                srcs,
+                format!(
+                    "gap of {spread:.4} mm closed at ({:.3}, {:.3}) (join tolerance {tol} mm)",
+                    nodes[k][0], nodes[k][1]
+                ),
+            ));
+        }
+    }
+    let mut graph = Graph {
+        nodes,
+        edges: Vec::new(),
+    };
+    for (i, p) in pieces.iter().enumerate() {
+        let (a, b) = (end_node[2 * i], end_node[2 * i + 1]);
+        if a == b {
+            // shorter than the tolerance (or a full circle drawn as one arc: not from
+            // entities, those are closed contours already)
+            chains.repairs.push((
+                vec![p.src],
+                format!(
+                    "a piece shorter than the join tolerance ({:.4} mm) dropped",
+                    p.seg.length()
+                ),
+            ));
+            continue;
+        }
+        let seg = Segment {
+            start: graph.nodes[a],
+            end: graph.nodes[b],
+            bulge: p.seg.bulge,
+        };
+        graph.edges.push((a, b, seg, i));
+    }
+    let mut alive = vec![true; graph.edges.len()];
+    loop {
+        let changed = prune(&graph, &mut alive, &pieces, &mut chains);
+        if !trace(&graph, &mut alive, &pieces, &mut chains) && !changed {
+            break;
+        }
+    }
+    chains
+}
+
+fn incidence(g: &Graph, alive: &[bool]) -> Vec<Vec<Half>> {
+    let mut at = vec![Vec::new(); g.nodes.len()];
+    for (e, &(a, b, _, _)) in g.edges.iter().enumerate() {
+        if alive[e] {
+            at[a].push(Half { e, fwd: true });
+            at[b].push(Half { e, fwd: false });
+        }
+    }
+    at
+}
+
+/// Removes dangling runs (ends that meet nothing), reporting each run as an open contour.
+fn prune(g: &Graph, alive: &mut [bool], pieces: &[Piece], chains: &mut Chains) -> bool {
+    let at = incidence(g, alive);
+    let mut degree: Vec<usize> = at.iter().map(|v| v.len()).collect();
+    let loose: Vec<usize> = (0..g.nodes.len()).filter(|&n| degree[n] == 1).collect();
+    if loose.is_empty() {
+        return false;
+    }
+    let mut removed = Vec::new();
+    let mut stack = loose.clone();
+    while let Some(n) = stack.pop() {
+        if degree[n] != 1 {
+            continue;
+        }
+        let Some(h) = at[n].iter().copied().find(|h| alive[h.e]) else {
+            continue;
+        };
+        alive[h.e] = false;
+        removed.push(h.e);
+        degree[n] -= 1;
+        let m = g.to(h);
+        degree[m] -= 1;
+        if degree[m] == 1 {
+            stack.push(m);
+        }
+    }
+    // group the removed edges into runs
+    let mut parent: Vec<usize> = (0..g.nodes.len()).collect();
+    for &e in &removed {
+        union(&mut parent, g.edges[e].0, g.edges[e].1);
+    }
+    let mut runs: HashMap<usize, Vec<usize>> = HashMap::new();
+    for &e in &removed {
+        let r = find(&mut parent, g.edges[e].0);
+        runs.entry(r).or_default().push(e);
+    }
+    let mut keys: Vec<usize> = runs.keys().copied().collect();
+    keys.sort_unstable();
+    for k in keys {
+        let run = &runs[&k];
+        let mut srcs: Vec<usize> = run.iter().map(|&e| pieces[g.edges[e].3].src).collect();
+        srcs.sort_unstable();
+        srcs.dedup();
+        let run_loose: Vec<[f64; 2]> = loose
+            .iter()
+            .copied()
+            .filter(|&n| find(&mut parent, n) == k)
+            .map(|n| g.nodes[n])
+            .collect();
+        chains.open.push(Open {
+            srcs,
+            loose: run_loose,
+        });
+    }
+    true
+}
+
+/// Turns the components of the live graph into contours; returns whether bridges (lines
+/// joining two contours) were removed, so that the caller prunes again.
+fn trace(g: &Graph, alive: &mut [bool], pieces: &[Piece], chains: &mut Chains) -> bool {
+    let at = incidence(g, alive);
+    // components by node
+    let mut parent: Vec<usize> = (0..g.nodes.len()).collect();
+    for (e, &(a, b, _, _)) in g.edges.iter().enumerate() {
+        if alive[e] {
+            union(&mut parent, a, b);
+        }
+    }
+    let mut comps: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (e, &(a, _, _, _)) in g.edges.iter().enumerate() {
+        if alive[e] {
+            let r = find(&mut parent, a);
+            comps.entry(r).or_default().push(e);
+        }
+    }
+    let mut keys: Vec<usize> = comps.keys().copied().collect();
+    keys.sort_unstable();
+    // sorted outgoing half-edges per node, counter-clockwise by tangent, then curvature
+    let key = |h: Half| {
+        let s = g.seg(h);
+        let (t, _) = s.tangent_angles();
+        let curvature = s.arc().map_or(0.0, |(r, _)| s.bulge.signum() / r);
+        (t.rem_euclid(std::f64::consts::TAU), curvature)
+    };
+    let mut bridged = false;
+    let mut done: Vec<usize> = Vec::new();
+    for k in keys {
+        let edges = &comps[&k];
+        let branched = edges
+            .iter()
+            .any(|&e| at[g.edges[e].0].len() != 2 || at[g.edges[e].1].len() != 2);
+        let faces: Vec<Vec<Half>> = if branched {
+            let mut order: HashMap<usize, Vec<Half>> = HashMap::new();
+            for &e in edges {
+                for n in [g.edges[e].0, g.edges[e].1] {
+                    order.entry(n).or_insert_with(|| {
+                        let mut v = at[n].clone();
+                        v.sort_by(|a, b| {
+                            let (ka, kb) = (key(*a), key(*b));
+                            ka.0.total_cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+                        });
+                        v
+                    });
+                }
+            }
+            let mut seen: HashMap<(usize, bool), bool> = HashMap::new();
+            let mut faces = Vec::new();
+            for &e in edges {
+                for fwd in [true, false] {
+                    let start = Half { e, fwd };
+                    if seen.contains_key(&(e, fwd)) {
+                        continue;
+                    }
+                    let mut face = Vec::new();
+                    let mut h = start;
+                    loop {
+                        seen.insert((h.e, h.fwd), true);
+                        face.push(h);
+                        let v = g.to(h);
+                        let around = &order[&v];
+                        let twin = Half {
+                            e: h.e,
+                            fwd: !h.fwd,
+                        };
+                        let i = around.iter().position(|&x| x == twin).unwrap_or(0);
+                        h = around[(i + around.len() - 1) % around.len()];
+                        if h == start || face.len() > 4 * edges.len() {
+                            break;
+                        }
+                    }
+                    faces.push(face);
+                }
+            }
+            faces
+        } else {
+            // a simple cycle
+            let mut face = Vec::new();
+            let start = Half {
+                e: edges[0],
+                fwd: true,
+            };
+            let mut h = start;
+            loop {
+                face.push(h);
+                let v = g.to(h);
+                let next = at[v].iter().copied().find(|x| x.e != h.e).unwrap_or(h);
+                h = if g.from(next) == v {
+                    next
+                } else {
+                    Half {
+                        e: next.e,
+                        fwd: !next.fwd,
+                    }
+                };
+                if h == start || face.len() > edges.len() {
+                    break;
+                }
+            }
+            vec![face]
+        };
+        let contour_of = |face: &[Half]| {
+            Contour::new(
+                face.iter()
+                    .map(|&h| {
+                        let s = g.seg(h);
+                        Vertex::new(s.start[0], s.start[1], s.bulge)
+                    })
+                    .collect(),
+            )
+        };
+        let outer = if branched {
+            // the outer face runs clockwise: the most negative area
+            let areas: Vec<f64> = faces.iter().map(|f| contour_of(f).signed_area()).collect();
+            let i = (0..faces.len())
+                .min_by(|&a, &b| areas[a].total_cmp(&areas[b]))
+                .unwrap_or(0);
+            faces[i].clone()
+        } else {
+            faces[0].clone()
+        };
+        let srcs_of = |es: &mut dyn Iterator<Item = usize>| {
+            let mut s: Vec<usize> = es.map(|e| pieces[g.edges[e].3].src).collect();
+            s.sort_unstable();
+            s.dedup();
+            s
+        };
+        if branched {
+            let on: Vec<(usize, bool)> = outer.iter().map(|h| (h.e, h.fwd)).collect();
+            let bridges: Vec<usize> = outer
+                .iter()
+                .filter(|h| on.contains(&(h.e, !h.fwd)) && h.fwd)
+                .map(|h| h.e)
+                .collect();
+            if !bridges.is_empty() {
+                for &e in &bridges {
+                    alive[e] = false;
+                }
+                chains.repairs.push((
+                    srcs_of(&mut bridges.iter().copied()),
+                    "a line joining two contours: not cut".into(),
+                ));
+                bridged = true;
+                continue;
+            }
+            let inner: Vec<usize> = edges
+                .iter()
+                .copied()
+                .filter(|e| !on.iter().any(|o| o.0 == *e))
+                .collect();
+            if !inner.is_empty() {
+                chains.repairs.push((
+                    srcs_of(&mut inner.iter().copied()),
+                    "lines inside a contour that meet it at both ends (bend or construction lines?): not cut".into(),
+                ));
+            }
+        }
+        let mut contour = contour_of(&outer);
+        if branched {
+            contour = contour.reversed();
+        }
+        // collinear pieces (an edge split where a bend line met it) become one segment
+        let simplified = cavalier_contours::polyline::PlineSource::remove_redundant(&contour, 1e-9)
+            .map(|p| Contour::from_pline(&p))
+            .unwrap_or(contour);
+        let cut = outer
+            .iter()
+            .map(|h| pieces[g.edges[h.e].3].cut)
+            .min()
+            .unwrap_or(Cut::Either);
+        chains.contours.push(Chained {
+            contour: simplified,
+            srcs: srcs_of(&mut outer.iter().map(|h| h.e)),
+            cut,
+        });
+        done.extend(edges.iter().copied());
+    }
+    for e in done {
+        alive[e] = false;
+    }
+    bridged
+}

@@ -1,0 +1,343 @@
+//! Closed contours into parts: repeated contours removed, a drawing border recognised,
+//! then outlines and holes by layer role and containment. A contour inside a hole (an
+//! island) is a slug, not a part, unless asked for; an `INSIDE` contour in no outline is
+//! left out by name; etching goes with the part it lies on.
+
+use sv_geom::Contour;
+
+use super::chain::{Chained, Open};
+use super::source::{Closed, Cut};
+
+/// A contour to classify.
+pub(crate) struct Candidate {
+    pub(crate) contour: Contour,
+    pub(crate) srcs: Vec<usize>,
+    pub(crate) cut: Cut,
+    area: f64,
+    bounds: ([f64; 2], [f64; 2]),
+    probe: [f64; 2],
+}
+
+impl Candidate {
+    fn new(contour: Contour, srcs: Vec<usize>, cut: Cut) -> Self {
+        let area = contour.area();
+        let bounds = contour.bounds().unwrap_or(([0.0; 2], [0.0; 2]));
+        let probe = contour.segments().next().map_or([0.0; 2], |s| s.midpoint());
+        Self {
+            contour,
+            srcs,
+            cut,
+            area,
+            bounds,
+            probe,
+        }
+    }
+
+    fn holds(&self, p: [f64; 2]) -> bool {
+        let (lo, hi) = self.bounds;
+        p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1] && self.contour.contains(p)
+    }
+}
+
+pub(crate) fn candidates(closed: Vec<Closed>, chained: Vec<Chained>) -> Vec<Candidate> {
+    let mut out: Vec<Candidate> = closed
+        .into_iter()
+        .map(|c| Candidate::new(c.contour, vec![c.src], c.cut))
+        .collect();
+    out.extend(
+        chained
+            .into_iter()
+            .map(|c| Candidate::new(c.contour, c.srcs, c.cut)),
+    );
+    // file order: by the first entity of each
+    out.sort_by_key(|c| c.srcs.first().copied().unwrap_or(usize::MAX));
+    out
+}
+
+/// What classification found.
+#[derive(Default)]
+pub(crate) struct Classified {
+    /// (outline, holes, sources of the outline)
+    pub(crate) parts: Vec<(Contour, Vec<Contour>, Vec<usize>)>,
+    /// (sources, what) for the notes
+    pub(crate) notes: Vec<(Vec<usize>, String)>,
+    /// (sources, what) for contours left out
+    pub(crate) rejected: Vec<(Vec<usize>, String)>,
+}
+
+/// Whether `b` repeats `a` (the same contour within `tol`, either way round).
+fn same(a: &Candidate, b: &Candidate, tol: f64) -> bool {
+    let scale = a.area.max(b.area).max(1e-12);
+    if (a.area - b.area).abs() > 1e-6 * scale + tol * a.contour.length().max(b.contour.length()) {
+        return false;
+    }
+    let close = |x: [f64; 2], y: [f64; 2]| (x[0] - y[0]).abs() <= tol && (x[1] - y[1]).abs() <= tol;
+    if !(close(a.bounds.0, b.bounds.0) && close(a.bounds.1, b.bounds.1)) {
+        return false;
+    }
+    let (fa, fb) = (a.contour.flatten(tol / 4.0), b.contour.flatten(tol / 4.0));
+    let within = |pts: &[[f64; 2]], poly: &[[f64; 2]]| {
+        pts.iter()
+            .all(|&p| sv_geom::planar::boundary_distance(p, poly) <= tol)
+    };
+    within(&fa, &fb) && within(&fb, &fa)
+}
+
+/// Classifies `cands` (see the module doc); `texts` are TEXT positions (a title block).
+pub(crate) fn classify(
+    mut cands: Vec<Candidate>,
+    texts: &[[f64; 2]],
+    tol: f64,
+    islands: bool,
+) -> Classified {
+    let mut out = Classified::default();
+    // zero-size contours
+    cands.retain(|c| {
+        let keep = c.area > 1e-9 && c.contour.vertices.len() >= 2;
+        if !keep {
+            let why = if c.contour.self_intersects() {
+                "self-intersecting closed contour (its areas cancel)"
+            } else {
+                "closed contour of zero area"
+            };
+            out.rejected.push((c.srcs.clone(), why.into()));
+        }
+        keep
+    });
+    // repeated contours: the later copy goes
+    let mut order: Vec<usize> = (0..cands.len()).collect();
+    order.sort_by(|&a, &b| cands[a].area.total_cmp(&cands[b].area));
+    let mut gone = vec![false; cands.len()];
+    for (k, &i) in order.iter().enumerate() {
+        if gone[i] {
+            continue;
+        }
+        for &j in &order[k + 1..] {
+            if cands[j].area > cands[i].area * (1.0 + 1e-6) + tol * cands[i].contour.length() {
+                break;
+            }
+            if !gone[j] && same(&cands[i], &cands[j], tol) {
+                let (keep, drop) = if i < j { (i, j) } else { (j, i) };
+                gone[drop] = true;
+                let mut srcs = cands[drop].srcs.clone();
+                srcs.extend(&cands[keep].srcs);
+                out.notes
+                    .push((srcs, "a contour drawn twice: the copy removed".into()));
+                if drop == i {
+                    break;
+                }
+            }
+        }
+    }
+    let mut cands: Vec<Candidate> = cands
+        .into_iter()
+        .zip(gone)
+        .filter_map(|(c, g)| (!g).then_some(c))
+        .collect();
+    // containment: the parent is the smallest larger contour holding a point of this one
+    let parents = |cands: &[Candidate]| -> Vec<Option<usize>> {
+        (0..cands.len())
+            .map(|i| {
+                (0..cands.len())
+                    .filter(|&j| {
+                        j != i && cands[j].area > cands[i].area && cands[j].holds(cands[i].probe)
+                    })
+                    .min_by(|&a, &b| cands[a].area.total_cmp(&cands[b].area))
+            })
+            .collect()
+    };
+    let mut parent = parents(&cands);
+    // a drawing border: a polygon around every other contour that holds a title block
+    // (text or lines inside it) or contours inside holes
+    if cands.len() > 1 {
+        let depth = |parent: &[Option<usize>], mut i: usize| {
+            let mut d = 0;
+            while let Some(p) = parent[i] {
+                d += 1;
+                i = p;
+            }
+            d
+        };
+        let roots: Vec<usize> = (0..cands.len()).filter(|&i| parent[i].is_none()).collect();
+        if let [r] = roots[..] {
+            let c = &cands[r];
+            let polygon = c.contour.vertices.iter().all(|v| v.bulge == 0.0);
+            let text = texts.iter().any(|&t| c.holds(t));
+            let deep = (0..cands.len()).any(|i| depth(&parent, i) >= 2);
+            if polygon && c.cut == Cut::Either && (text || deep) {
+                let why = if text {
+                    "text inside it"
+                } else {
+                    "contours inside holes inside it"
+                };
+                out.notes.push((
+                    c.srcs.clone(),
+                    format!("read as a drawing border (a polygon around every other contour, with {why}): not a part"),
+                ));
+                cands.remove(r);
+                parent = parents(&cands);
+            }
+        }
+    }
+    // kinds, from the roots down
+    #[derive(Clone, Copy, PartialEq)]
+    enum Kind {
+        Outline,
+        Hole(usize),
+        Slug,
+        Orphan,
+    }
+    let n = cands.len();
+    let mut kind: Vec<Option<Kind>> = vec![None; n];
+    let mut depth_order: Vec<usize> = (0..n).collect();
+    let depth_of = |mut i: usize| {
+        let mut d = 0;
+        while let Some(p) = parent[i] {
+            d += 1;
+            i = p;
+        }
+        d
+    };
+    depth_order.sort_by_key(|&i| (depth_of(i), i));
+    for &i in &depth_order {
+        let k = match (
+            parent[i].and_then(|p| kind[p].map(|k| (p, k))),
+            cands[i].cut,
+        ) {
+            (_, Cut::Outside) => Kind::Outline,
+            (None, Cut::Either) => Kind::Outline,
+            (None, Cut::Inside) => Kind::Orphan,
+            (Some((p, Kind::Outline)), _) => Kind::Hole(p),
+            (Some((_, Kind::Hole(o))), Cut::Inside) => Kind::Hole(o),
+            (Some((_, Kind::Hole(_))), Cut::Either) => {
+                if islands {
+                    Kind::Outline
+                } else {
+                    Kind::Slug
+                }
+            }
+            (Some((_, Kind::Slug | Kind::Orphan)), _) => Kind::Slug,
+        };
+        kind[i] = Some(k);
+    }
+    let mut index = vec![usize::MAX; n];
+    for i in 0..n {
+        match kind[i] {
+            Some(Kind::Outline) => {
+                index[i] = out.parts.len();
+                out.parts
+                    .push((cands[i].contour.clone(), Vec::new(), cands[i].srcs.clone()));
+            }
+            Some(Kind::Orphan) => out.rejected.push((
+                cands[i].srcs.clone(),
+                "an INSIDE contour within no OUTSIDE outline (nor any other outline)".into(),
+            )),
+            Some(Kind::Slug) => {
+                let top = parent[i].filter(|&p| kind[p] != Some(Kind::Slug));
+                if top.is_some() {
+                    out.notes.push((
+                        cands[i].srcs.clone(),
+                        "a contour inside a hole: the slug that falls out, not nested (--islands nests it as a part)".into(),
+                    ));
+                }
+            }
+            _ => {}
+        }
+    }
+    for i in 0..n {
+        if let Some(Kind::Hole(o)) = kind[i] {
+            let k = index[o];
+            out.parts[k].1.push(cands[i].contour.clone());
+        }
+    }
+    out
+}
+
+/// Etched lines to the smallest part whose outline holds their first point.
+pub(crate) fn etch_of(
+    parts: &[(Contour, Vec<Contour>, Vec<usize>)],
+    etch: Vec<(Vec<[f64; 2]>, usize)>,
+    notes: &mut Vec<(Vec<usize>, String)>,
+) -> Vec<Vec<Vec<[f64; 2]>>> {
+    let boxes: Vec<([f64; 2], [f64; 2])> = parts
+        .iter()
+        .map(|p| p.0.bounds().unwrap_or(([0.0; 2], [0.0; 2])))
+        .collect();
+    let areas: Vec<f64> = parts.iter().map(|p| p.0.area()).collect();
+    let mut out = vec![Vec::new(); parts.len()];
+    for (line, src) in etch {
+        let p = line[0];
+        let on = (0..parts.len())
+            .filter(|&k| {
+                let (lo, hi) = boxes[k];
+                p[0] >= lo[0]
+                    && p[0] <= hi[0]
+                    && p[1] >= lo[1]
+                    && p[1] <= hi[1]
+                    && parts[k].0.contains(p)
+            })
+            .min_by(|&a, &b| areas[a].total_cmp(&areas[b]));
+        match on {
+            Some(k) => out[k].push(line),
+            None => notes.push((vec![src], "etching on no part: not etched".into())),
+        }
+    }
+    out
+}
+
+/// Open runs split into those whose loose ends all lie on a contour (lines drawn up to a
+/// contour: bend, construction or title-block lines, not cut) and the rest; the rest is one
+/// message naming the smallest gap between loose ends, so that the user can set the join
+/// tolerance.
+pub(crate) fn open_runs(
+    open: Vec<Open>,
+    contours: &[&Contour],
+    tol: f64,
+) -> (Vec<Open>, Option<(Vec<usize>, String)>) {
+    type Boxed = (([f64; 2], [f64; 2]), Vec<[f64; 2]>);
+    let flat: Vec<Boxed> = contours
+        .iter()
+        .map(|c| {
+            (
+                c.bounds().unwrap_or(([0.0; 2], [0.0; 2])),
+                c.flatten(tol / 4.0),
+            )
+        })
+        .collect();
+    let on_contour = |p: [f64; 2]| {
+        flat.iter().any(|((lo, hi), f)| {
+            p[0] >= lo[0] - tol
+                && p[1] >= lo[1] - tol
+                && p[0] <= hi[0] + tol
+                && p[1] <= hi[1] + tol
+                && sv_geom::planar::boundary_distance(p, f) <= tol * 1.25
+        })
+    };
+    let (attached, loose): (Vec<Open>, Vec<Open>) = open
+        .into_iter()
+        .partition(|o| !o.loose.is_empty() && o.loose.iter().all(|&p| on_contour(p)));
+    if loose.is_empty() {
+        return (attached, None);
+    }
+    let ends: Vec<[f64; 2]> = loose.iter().flat_map(|o| o.loose.iter().copied()).collect();
+    let mut best: Option<(f64, [f64; 2])> = None;
+    for i in 0..ends.len() {
+        for j in i + 1..ends.len() {
+            let d = (ends[i][0] - ends[j][0]).hypot(ends[i][1] - ends[j][1]);
+            if best.is_none_or(|b| d < b.0) {
+                best = Some((d, ends[i]));
+            }
+        }
+    }
+    let srcs: Vec<usize> = loose.iter().flat_map(|o| o.srcs.iter().copied()).collect();
+    let why = match best {
+        Some((d, p)) => format!(
+            "open contour: {} loose ends; the nearest two are {d:.3} mm apart at ({:.3}, {:.3}), more than the join tolerance {tol} mm",
+            ends.len(),
+            p[0],
+            p[1]
+        ),
+        None => "open contour".into(),
+    };
+    (attached, Some((srcs, why)))
+}

@@ -1,0 +1,194 @@
+//! The DXF reader on small hand-written files: LWPOLYLINE with bulges, CIRCLE holes,
+//! LINE/ARC chains, POLYLINE/VERTEX, the shop layers and what is never cut, units, the join
+//! tolerance and islands. Files written by other CAD libraries are the end-to-end tests'
+//! (`tests/e2e/dxf_inputs.rs`, written by ezdxf).
+
+use sv_dxf::{parse_parts, read_dxf, ReadOptions, Units};
+use sv_geom::planar::polygon_area;
+
+const DXF_LW: &str = "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n8\nOUTSIDE\n90\n4\n70\n1\n10\n0\n20\n0\n42\n0\n10\n100\n20\n0\n42\n1\n10\n100\n20\n50\n42\n0\n10\n0\n20\n50\n0\nCIRCLE\n8\nINSIDE\n10\n40\n20\n25\n40\n10\n0\nLWPOLYLINE\n70\n0\n10\n500\n20\n500\n10\n600\n20\n500\n0\nENDSEC\n0\nEOF\n";
+
+#[test]
+fn dxf_lwpolyline_with_bulge_and_circle_hole() {
+    let read = parse_parts(DXF_LW, "bracket").unwrap();
+    assert_eq!(read.parts.len(), 1);
+    let p = &read.parts[0];
+    assert_eq!(p.id, "bracket");
+    assert_eq!(p.outer.vertices.len(), 4);
+    assert_eq!(p.outer.vertices[1].bulge, 1.0);
+    assert_eq!(p.holes.len(), 1);
+    // the half-circle end reaches x = 125
+    let (_, hi) = p.outer.bounds().unwrap();
+    assert!((hi[0] - 125.0).abs() < 1e-6);
+    // the open polyline is rejected with a name
+    assert_eq!(read.rejected.len(), 1);
+    assert!(read.rejected[0].to_string().contains("open contour"));
+    assert!(read.rejected[0].to_string().contains("bracket"));
+}
+
+#[test]
+fn dxf_line_arc_chain_and_polyline() {
+    // a 40x20 slot: two lines and two half arcs, plus a POLYLINE square elsewhere
+    let text = "0\nSECTION\n2\nENTITIES\n\
+0\nLINE\n10\n0\n20\n0\n11\n40\n21\n0\n\
+0\nARC\n10\n40\n20\n10\n40\n10\n50\n270\n51\n90\n\
+0\nLINE\n10\n40\n20\n20\n11\n0\n21\n20\n\
+0\nARC\n10\n0\n20\n10\n40\n10\n50\n90\n51\n270\n\
+0\nPOLYLINE\n66\n1\n70\n1\n0\nVERTEX\n10\n100\n20\n0\n0\nVERTEX\n10\n130\n20\n0\n0\nVERTEX\n10\n130\n20\n30\n0\nVERTEX\n10\n100\n20\n30\n0\nSEQEND\n\
+0\nENDSEC\n0\nEOF\n";
+    let read = parse_parts(text, "mix").unwrap();
+    assert!(read.rejected.is_empty(), "{:?}", read.rejected);
+    assert_eq!(read.parts.len(), 2);
+    let areas: Vec<f64> = read
+        .parts
+        .iter()
+        .map(|p| polygon_area(&p.outer.flatten(0.001)).abs())
+        .collect();
+    let slot = 40.0 * 20.0 + std::f64::consts::PI * 100.0;
+    assert!(areas.iter().any(|a| (a - slot).abs() < 0.5), "{areas:?}");
+    assert!(areas.iter().any(|a| (a - 900.0).abs() < 1e-6), "{areas:?}");
+    assert!(parse_parts("garbage\n", "bad").is_err());
+}
+
+/// A closed LWPOLYLINE of straight edges on `layer`.
+fn lw(layer: &str, pts: &[[f64; 2]]) -> String {
+    let mut s = format!("0\nLWPOLYLINE\n8\n{layer}\n90\n{}\n70\n1\n", pts.len());
+    for p in pts {
+        s += &format!("10\n{}\n20\n{}\n", p[0], p[1]);
+    }
+    s
+}
+
+fn square(x: f64, y: f64, s: f64) -> [[f64; 2]; 4] {
+    [[x, y], [x + s, y], [x + s, y + s], [x, y + s]]
+}
+
+/// Shop layers: OUTSIDE contours are the outlines, INSIDE ones holes of the outline around
+/// them; INFO (closed tiles, sheet outline, text) and ETCH are not parts. A part inside
+/// another's hole (part in part on a sheet) is a part of its own.
+#[test]
+fn dxf_shop_layers_outlines_holes_and_what_is_not_cut() {
+    let mut text = String::from("0\nSECTION\n2\nENTITIES\n");
+    // a sheet outline and a nominal tile on INFO, etched lines, a label
+    text += &lw("INFO", &square(-10.0, -10.0, 2000.0));
+    text += &lw("INFO", &square(5.0, 5.0, 90.0));
+    text += &lw("ETCH", &square(20.0, 20.0, 5.0));
+    text += "0\nTEXT\n8\nINFO\n10\n0\n20\n0\n40\n5\n1\nA01\n";
+    // part 1: a 100 mm square with two slots
+    text += &lw("INSIDE", &square(10.0, 10.0, 20.0));
+    text += &lw("INSIDE", &square(60.0, 60.0, 20.0));
+    text += &lw("OUTSIDE", &square(0.0, 0.0, 100.0));
+    // part 2: a 400 mm square with a 300 mm hole holding part 3 (40 mm, one slot)
+    text += &lw("INSIDE", &square(550.0, 50.0, 300.0));
+    text += &lw("OUTSIDE", &square(500.0, 0.0, 400.0));
+    text += &lw("INSIDE", &square(610.0, 110.0, 10.0));
+    text += &lw("OUTSIDE", &square(600.0, 100.0, 40.0));
+    // a slot in no outline
+    text += &lw("INSIDE", &square(1500.0, 1500.0, 10.0));
+    text += "0\nENDSEC\n0\nEOF\n";
+    let read = parse_parts(&text, "sheet").unwrap();
+    let holes: Vec<(String, usize)> = read
+        .parts
+        .iter()
+        .map(|p| (p.id.clone(), p.holes.len()))
+        .collect();
+    assert_eq!(
+        holes,
+        [
+            ("sheet#1".to_string(), 2),
+            ("sheet#2".to_string(), 1),
+            ("sheet#3".to_string(), 1)
+        ]
+    );
+    // the etched square goes with part 1 (closed: five points), nothing else etches
+    assert_eq!(read.parts[0].etch.len(), 1);
+    assert_eq!(read.parts[0].etch[0].len(), 5);
+    assert!(read.parts[1].etch.is_empty() && read.parts[2].etch.is_empty());
+    assert_eq!(read.rejected.len(), 1, "{:?}", read.rejected);
+    let why = read.rejected[0].to_string();
+    assert!(why.contains("sheet") && why.contains("OUTSIDE"), "{why}");
+    // without shop layers the same contours nest by containment: the stray slot is a part
+    // of its own, the square inside the hole of part 2 the slug that falls out of it
+    // (noted, not nested) unless islands are asked for
+    let generic = text
+        .replace("\n8\nINSIDE\n", "\n8\n0\n")
+        .replace("\n8\nOUTSIDE\n", "\n8\n0\n");
+    let read = parse_parts(&generic, "sheet").unwrap();
+    assert_eq!(read.parts.len(), 3, "{:?}", read.notes);
+    assert!(
+        read.notes.iter().any(|n| n.what.contains("inside a hole")),
+        "{:?}",
+        read.notes
+    );
+    let options = ReadOptions {
+        islands: true,
+        ..ReadOptions::default()
+    };
+    let read = read_dxf(generic.as_bytes(), "sheet", &options).unwrap();
+    assert_eq!(read.parts.len(), 4);
+}
+
+/// A file with a header setting `$INSUNITS` and `entities`.
+fn with_units(code: i32, entities: &str) -> String {
+    format!("0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n{code}\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n{entities}0\nENDSEC\n0\nEOF\n")
+}
+
+#[test]
+fn units_scale_to_mm_and_unknown_units_are_refused() {
+    let square = lw("0", &square(0.0, 0.0, 2.0));
+    let inches = read_dxf(
+        with_units(1, &square).as_bytes(),
+        "in",
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    assert!((inches.parts[0].outer.area() - 4.0 * 25.4 * 25.4).abs() < 1e-6);
+    assert!(inches
+        .notes
+        .iter()
+        .any(|n| n.what.contains("scaled by 25.4")));
+    // --units overrides the file
+    let options = ReadOptions {
+        units: Some("m".parse::<Units>().unwrap()),
+        ..ReadOptions::default()
+    };
+    let metres = read_dxf(with_units(1, &square).as_bytes(), "m", &options).unwrap();
+    assert!((metres.parts[0].outer.area() - 4e6).abs() < 1e-3);
+    let err = read_dxf(
+        with_units(99, &square).as_bytes(),
+        "odd",
+        &ReadOptions::default(),
+    )
+    .unwrap_err();
+    assert!(err.to_string().starts_with("odd: $INSUNITS 99"), "{err}");
+    assert!(read_dxf(with_units(99, &square).as_bytes(), "odd", &options).is_ok());
+}
+
+#[test]
+fn the_join_tolerance_is_settable_and_open_contours_say_how_far_apart() {
+    // a 100 x 50 rectangle of lines with a 0.1 mm gap at one corner
+    let lines = "0\nLINE\n10\n0\n20\n0\n11\n100\n21\n0\n0\nLINE\n10\n100\n20\n0\n11\n100\n21\n50\n\
+0\nLINE\n10\n100\n20\n50\n11\n0\n21\n50\n0\nLINE\n10\n0\n20\n50\n11\n0\n21\n0.1\n";
+    let text = with_units(4, lines);
+    let read = read_dxf(text.as_bytes(), "gap", &ReadOptions::default()).unwrap();
+    assert!(read.parts.is_empty());
+    let why = read.rejected[0].to_string();
+    assert!(
+        why.contains("0.100 mm apart") && why.contains("gap"),
+        "{why}"
+    );
+    let options = ReadOptions {
+        join_tolerance: 0.2,
+        ..ReadOptions::default()
+    };
+    let read = read_dxf(text.as_bytes(), "gap", &options).unwrap();
+    assert_eq!(read.parts.len(), 1);
+    assert!((read.parts[0].outer.area() - 5000.0).abs() < 10.0);
+    assert!(
+        read.notes
+            .iter()
+            .any(|n| n.what.contains("gap of 0.1000 mm closed")),
+        "{:?}",
+        read.notes
+    );
+}
