@@ -32,3 +32,5 @@ mod serve;
 mod sheets;
 #[path = "e2e/solve.rs"]
 mod solve;
+#[path = "e2e/surface.rs"]
+mod surface;

@@ -21,9 +21,22 @@ fn solve_and_check(dir: &Dir, mesh: &Path, extra: &[&str]) -> Value {
         "{solved:?}"
     );
     let checked = dir.run(&["check", "out/frame.json"]);
-    checked.expect_code(0);
-    assert!(checked.stderr.is_empty(), "{checked:?}");
-    assert!(!checked.stdout.contains("FAIL"), "{checked:?}");
+    if mesh.ends_with("saddle.obj") {
+        // a translational saddle is planar but not conical: `check` holds the hub-mesh
+        // goals, so exactly the conical row fails
+        checked.expect_code(1);
+        let failed: Vec<&str> = checked
+            .stdout
+            .lines()
+            .filter(|l| l.ends_with("FAIL"))
+            .collect();
+        assert_eq!(failed.len(), 1, "{checked:?}");
+        assert!(failed[0].starts_with("conical residual"), "{checked:?}");
+    } else {
+        checked.expect_code(0);
+        assert!(checked.stderr.is_empty(), "{checked:?}");
+        assert!(!checked.stdout.contains("FAIL"), "{checked:?}");
+    }
     let frame = read_json(&dir.join("out/frame.json"));
     assert_eq!(frame["format"], "spin-valence/frame");
     assert_eq!(frame["version"], 1);

@@ -80,6 +80,9 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
     if let Some(out) = &args.out {
         cfg.out = out.clone();
     }
+    if let Some(layout) = &args.layout {
+        cfg.surface.layout = Some(layout.clone());
+    }
     if let Some(direction) = args.strip_direction {
         cfg.strips.direction = direction;
     }
@@ -110,38 +113,131 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
     ))
 }
 
-/// Load `builtin:NAME` or an OBJ/STL triangle mesh.
-pub fn load_target(spec: &str) -> Result<TargetMesh> {
-    if let Some(name) = spec.strip_prefix("builtin:") {
-        return sv_surface::builtin_target(name).map_err(|e| anyhow!("{e}"));
-    }
-    let path = Path::new(spec);
-    let bytes = output::read_bytes(path)?;
-    let mesh = sv_io::read_tri_mesh(&bytes, spec)?;
-    Ok(TargetMesh {
-        vertices: mesh.vertices,
-        triangles: mesh.triangles,
-    })
+/// Load `builtin:NAME` or an OBJ/STL triangle mesh (welded, oriented and checked by
+/// `sv_io::read_target`; what was repaired is said on stderr unless `quiet`), and check
+/// that it is drawn in millimetres at a size that holds 2 x 2 units of `unit` mm.
+pub fn load_target(spec: &str, unit: f64, quiet: bool) -> Result<TargetMesh> {
+    let mesh = if let Some(name) = spec.strip_prefix("builtin:") {
+        sv_surface::builtin_target(name).map_err(|e| anyhow!("{e}"))?
+    } else {
+        let path = Path::new(spec);
+        let bytes = output::read_bytes(path)?;
+        let file = sv_io::read_target(&bytes, spec)?;
+        let r = file.repairs;
+        if !quiet && (r.welded > 0 || r.dropped > 0 || r.flipped > 0) {
+            eprintln!(
+                "note: {spec}: welded {} duplicate vertices, dropped {} collapsed triangles, turned {} triangles to their neighbours' orientation",
+                r.welded, r.dropped, r.flipped
+            );
+        }
+        TargetMesh {
+            vertices: file.mesh.vertices,
+            triangles: file.mesh.triangles,
+        }
+    };
+    check_units(spec, &mesh, unit)?;
+    Ok(mesh)
 }
 
-/// Run `build`. Nothing is written unless every stage succeeded.
-pub fn run(args: &BuildArgs) -> Result<()> {
+/// A target too small for 2 x 2 units is most often drawn in metres or inches: say so
+/// with its bounding box and what it would measure in those units.
+fn check_units(spec: &str, mesh: &TargetMesh, unit: f64) -> Result<()> {
+    let Some(first) = mesh.vertices.first() else {
+        return Ok(());
+    };
+    let (lo, hi) = mesh
+        .vertices
+        .iter()
+        .fold((*first, *first), |(a, b), p| (a.inf(p), b.sup(p)));
+    let size = hi - lo;
+    let area = mesh.triangles.iter().fold(0.0, |a, t| {
+        let [p, q, r] = t.map(|i| mesh.vertices[i]);
+        a + 0.5 * (q - p).cross(&(r - p)).norm()
+    });
+    if area >= 4.0 * unit * unit {
+        return Ok(());
+    }
+    let dims = |k: f64, u: &str| {
+        format!(
+            "{} x {} x {} {u}",
+            number(size.x * k),
+            number(size.y * k),
+            number(size.z * k)
+        )
+    };
+    let mut hints = Vec::new();
+    for (factor, name, flag) in [(1000.0, "metres", "m"), (25.4, "inches", "in")] {
+        let area_mm = area * factor * factor;
+        if area_mm >= 4.0 * unit * unit {
+            hints.push(format!(
+                "if it is in {name} it is {} (scale it to mm, e.g. by {factor} for {flag})",
+                dims(1.0, flag)
+            ));
+        }
+    }
+    bail!(
+        "{spec}: the target's bounding box is {} and its area {} m^2, too small for 2 x 2 units of {} mm; targets are read in millimetres{}",
+        dims(1.0, "mm"),
+        number(area * 1e-6),
+        number(unit),
+        if hints.is_empty() {
+            String::new()
+        } else {
+            format!("; {}", hints.join("; "))
+        }
+    )
+}
+
+/// What a finished build reports back: the hub mesh goals it could not meet (empty when
+/// every goal holds), one line each naming the worst place.
+pub struct Outcome {
+    /// Unmet goals of the hub mesh (`SecondaryReport::unmet`).
+    pub unmet: Vec<String>,
+    /// Where the files went.
+    pub out: std::path::PathBuf,
+}
+
+/// Load the designer's coarse layout (a quad OBJ, planarity not required).
+fn load_layout(path: &Path) -> Result<sv_frame::QuadMesh> {
+    let bytes = output::read_bytes(path)?;
+    Ok(sv_io::read_quad_obj_bytes(
+        &bytes,
+        &path.display().to_string(),
+    )?)
+}
+
+/// Run `build`. Nothing is written unless every stage succeeded; a hub mesh that misses
+/// some goals is still carried through every stage and written (the outcome names them).
+pub fn run(args: &BuildArgs) -> Result<Outcome> {
     let started = Instant::now();
-    let (cfg, options) = resolve(args)?;
-    let target = load_target(&cfg.target)?;
+    let (cfg, mut options) = resolve(args)?;
+    let target = load_target(&cfg.target, cfg.secondary.unit_size, args.quiet)?;
+    let layout = cfg.surface.layout.as_deref().map(load_layout).transpose()?;
     let files = AtomicFiles::create(&cfg.out, &FILES)?;
     let strips_dir = AtomicDir::create(&cfg.out, "strips")?;
     let sheets_dir = AtomicDir::create(&cfg.out, "sheets")?;
 
     let t0 = Instant::now();
     let bar = progress_bar(args.quiet, cfg.secondary.max_iterations, "hub mesh");
-    let secondary = sv_surface::build_secondary(&target, &cfg.secondary, &mut |it, energy| {
+    let mut tick = |it: usize, energy: f64| {
         bar.set_position(it as u64);
         bar.set_message(format!("residual {energy:.3e}"));
-    });
+    };
+    let secondary = match &layout {
+        Some(coarse) => {
+            sv_surface::build_secondary_with_layout(&target, coarse, &cfg.secondary, &mut tick)
+        }
+        None => sv_surface::build_secondary(&target, &cfg.secondary, &mut tick),
+    };
     bar.finish_and_clear();
     let (mesh, report) = secondary.map_err(|e| anyhow!("{}: {e}", cfg.target))?;
     let secondary_s = t0.elapsed().as_secs_f64();
+    // the hub mesh is ours: where its planarity goal is unmet the report says so, and the
+    // primary solve still deploys it (hubs are best-fit rhombi) instead of refusing
+    options.solve.planarity_tolerance = options
+        .solve
+        .planarity_tolerance
+        .max(1.01 * report.planarity_max);
 
     let t1 = Instant::now();
     let bar = progress_bar(args.quiet, options.solve.max_iterations, "primary");
@@ -249,6 +345,10 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         stage_rows.extend(report::summary_rows(&report_stage, &report_path));
         let at = rows.len() - 2;
         rows.splice(at..at, stage_rows);
+        for (k, line) in report.unmet.iter().enumerate() {
+            let name = if k == 0 { "GOALS NOT MET" } else { "" };
+            rows.insert(3 + k, vec![name.into(), line.clone()]);
+        }
         rows.push(vec![
             "wrote".into(),
             written
@@ -259,7 +359,10 @@ pub fn run(args: &BuildArgs) -> Result<()> {
         ]);
         output::print_out(&output::table(&rows))?;
     }
-    Ok(())
+    Ok(Outcome {
+        unmet: report.unmet.clone(),
+        out: cfg.out.clone(),
+    })
 }
 
 fn finish(bar: &ProgressBar) {

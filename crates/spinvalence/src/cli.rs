@@ -11,7 +11,9 @@ Examples:
   spinvalence check out/cap/frame.json
 
 Lengths are millimetres, Z is up, angles on the command line are degrees.
-Exit codes: 0 success, 1 `check` found a violation, 2 bad input or usage.";
+Exit codes: 0 success, 1 `check` found a violation, 2 bad input or usage (or, with
+`build --strict`, hub mesh goals not met), 3 `build` wrote everything but some hub mesh
+goals are not met (the summary names them).";
 
 const SOLVE_EXAMPLES: &str = "\
 Examples:
@@ -72,12 +74,20 @@ Examples:
   # every parameter from a file, the unit size overridden on the command line
   spinvalence build --config build.toml --unit-size 200
 
+  # your own layout: a coarse quad mesh with the irregular vertices where you want them
+  spinvalence build --target roof.obj --layout roof_layout.obj --out out/roof
+
 Built-in targets: builtin:flat, builtin:vault, builtin:dome, builtin:saddle, builtin:pavilion.
 Writes DIR/mesh.obj (hub mesh), frame.json, frame.obj, strips.json, strips/ (one DXF and one
 SVG per strip), nest.json and sheets/ (the strips nested on plasma sheets: one DXF and one
 SVG per sheet), report.html (the build report: open it in a browser, it needs no network),
 bom.csv (one row per strip), report.json and timings.json, all or nothing.
-`spinvalence build --print-config` prints a config file with every default.";
+`spinvalence build --print-config` prints a config file with every default.
+
+Exit codes: 0 every hub mesh goal met; 3 built and written, but some goals are not met
+(planarity, conical, distance to target or boundary, coverage, edge ratio, face sides):
+the summary and report.html name each with its worst place; 2 bad input or usage, or
+with --strict unmet goals (the files are still written, to look at).";
 
 const NEST_EXAMPLES: &str = "\
 Examples:
@@ -202,6 +212,13 @@ pub struct BuildArgs {
     /// Unit (face) side in mm (default 300).
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     pub unit_size: Option<f64>,
+    /// A coarse quad mesh (OBJ, mm) laid out as you want the hub mesh, irregular vertices
+    /// included; it is subdivided to the unit size, laid onto the target and optimised.
+    #[arg(long, value_name = "COARSE.obj")]
+    pub layout: Option<PathBuf>,
+    /// Unmet hub mesh goals are an error (exit code 2) instead of exit code 3.
+    #[arg(long)]
+    pub strict: bool,
     /// Spin angle of the hubs in degrees (default 45).
     #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub spin_angle: Option<f64>,

@@ -4,6 +4,9 @@
 //! target = "builtin:pavilion"   # or a path to an OBJ/STL triangle mesh in mm
 //! out = "out"
 //!
+//! [surface]                     # the layout of the hub mesh
+//! layout = "coarse.obj"         # a designer's coarse quad mesh (optional)
+//!
 //! [secondary]                   # the hub mesh (sv_surface::SecondaryOptions)
 //! unit_size = 300.0
 //! planarity_weight = 1.0
@@ -47,6 +50,10 @@ pub struct BuildConfig {
     pub target: String,
     /// Output directory.
     pub out: PathBuf,
+    /// The layout of the hub mesh (not printed while it holds no layout: it has no default
+    /// to show).
+    #[serde(skip_serializing_if = "SurfaceConfig::is_default")]
+    pub surface: SurfaceConfig,
     /// Secondary (hub) mesh options.
     pub secondary: SecondaryOptions,
     /// Primary-surface solve options.
@@ -57,6 +64,23 @@ pub struct BuildConfig {
     pub profile: ProfileParams,
     /// Nesting of the strips onto sheets.
     pub nest: NestConfig,
+}
+
+/// `[surface]`: where the hub mesh's layout comes from.
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SurfaceConfig {
+    /// A designer's coarse quad mesh (OBJ, mm) with the irregular vertices where they
+    /// should be; subdivided to the unit size and laid onto the target. Without it the
+    /// layout is automatic.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub layout: Option<PathBuf>,
+}
+
+impl SurfaceConfig {
+    fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 /// `[nest]`: the strips on plasma sheets. The part spacing is the profile's kerf plus
@@ -179,6 +203,7 @@ impl Default for BuildConfig {
         Self {
             target: format!("builtin:{}", sv_surface::DEFAULT_BUILTIN),
             out: PathBuf::from(DEFAULT_OUT),
+            surface: SurfaceConfig::default(),
             secondary: SecondaryOptions::default(),
             primary: PrimaryConfig::default(),
             strips: StripsConfig::default(),

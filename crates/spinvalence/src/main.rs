@@ -2,7 +2,9 @@
 //!
 //! Thin by design: parse arguments ([`cli`]), call the library crates, print, and map
 //! errors to exit codes. Exit codes: 0 success, 1 `check` found a violation, 2 bad input
-//! or usage. Every error is one line on stderr: `error: what and where`.
+//! or usage (or unmet hub mesh goals with `build --strict`), 3 `build` wrote everything but
+//! some hub mesh goals are not met. Every error is one line on stderr: `error: what and
+//! where`.
 
 mod build;
 mod check;
@@ -28,6 +30,8 @@ use cli::{Cli, Command};
 const EXIT_VIOLATION: u8 = 1;
 /// Exit code of bad input or usage.
 const EXIT_ERROR: u8 = 2;
+/// Exit code of a build that wrote everything with some hub mesh goals unmet.
+const EXIT_UNMET: u8 = 3;
 
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
@@ -82,10 +86,27 @@ fn run(cli: &Cli) -> Result<ExitCode> {
         Command::Build(args) => {
             if args.print_config {
                 output::print_out(&config::default_toml())?;
-            } else {
-                build::run(args)?;
+                return Ok(ExitCode::SUCCESS);
             }
-            Ok(ExitCode::SUCCESS)
+            let outcome = build::run(args)?;
+            if outcome.unmet.is_empty() {
+                return Ok(ExitCode::SUCCESS);
+            }
+            let goals = outcome.unmet.join("; ");
+            let out = outcome.out.display();
+            if args.strict {
+                eprintln!(
+                    "error: {} hub mesh goal(s) not met (--strict): {goals}; the files are in {out}",
+                    outcome.unmet.len()
+                );
+                Ok(ExitCode::from(EXIT_ERROR))
+            } else {
+                eprintln!(
+                    "warning: {} hub mesh goal(s) not met: {goals}; everything was built and written to {out} (exit code {EXIT_UNMET})",
+                    outcome.unmet.len()
+                );
+                Ok(ExitCode::from(EXIT_UNMET))
+            }
         }
     }
 }

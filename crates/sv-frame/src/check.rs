@@ -13,16 +13,26 @@ pub struct CheckOptions {
     /// Absolute tolerance (mm) when recomputed gaps, overlaps and hubs are compared with
     /// the file; JSON numbers round-trip exactly, so this only absorbs arithmetic.
     pub length_tolerance: Real,
-    /// Largest allowed planarity residual (diagonal distance / mean edge).
+    /// Largest allowed planarity residual (diagonal distance / mean edge). Default: the
+    /// hub-mesh goal [`GOAL_PLANARITY`].
     pub planarity_tolerance: Real,
+    /// Largest allowed conical residual (rad, `QuadMesh::conical_residuals`). Default:
+    /// the hub-mesh goal [`GOAL_CONICAL_DEG`] in radians.
+    pub conical_tolerance: Real,
 }
+
+/// Planarity goal of the hub mesh (diagonal distance / mean edge), held by `check`.
+pub const GOAL_PLANARITY: Real = 0.002;
+/// Conical goal of the hub mesh (degrees), held by `check`.
+pub const GOAL_CONICAL_DEG: Real = 0.5;
 
 impl Default for CheckOptions {
     fn default() -> Self {
         Self {
             relative_tolerance: 1e-9,
             length_tolerance: 1e-6,
-            planarity_tolerance: crate::MeshChecks::DEFAULT_PLANARITY_TOLERANCE,
+            planarity_tolerance: GOAL_PLANARITY,
+            conical_tolerance: GOAL_CONICAL_DEG.to_radians(),
         }
     }
 }
@@ -276,11 +286,10 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
     for (f, r) in mesh.planarity_residuals().into_iter().enumerate() {
         planar.see(r, || format!("face {f}"));
     }
-    let reported = frame
-        .solve
-        .as_ref()
-        .map_or(Real::INFINITY, |s| s.conical_max);
-    let mut conical = Worst::new("conical residual <= reported (rad)", reported + 1e-9);
+    let mut conical = Worst::new(
+        "conical residual (rad, any valence)",
+        options.conical_tolerance,
+    );
     for (v, r) in mesh.conical_residuals() {
         conical.see(r, || format!("vertex {v}"));
     }

@@ -22,13 +22,15 @@ mod hub;
 mod mesh;
 mod solve;
 
-pub use check::{check_frame, CheckOptions, CheckReport, CheckRow};
+pub use check::{
+    check_frame, CheckOptions, CheckReport, CheckRow, GOAL_CONICAL_DEG, GOAL_PLANARITY,
+};
 pub use error::{FrameError, MeshError};
 pub use file::{
     FrameFile, FrameParams, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT,
 };
 pub use hub::{hubs_from_mesh, Hub};
-pub use mesh::{Link, MeshChecks, QuadMesh};
+pub use mesh::{normal_cone_residual, Link, MeshChecks, QuadMesh};
 pub use solve::{
     evaluate, solve, Evaluation, GapObjective, Progress, SidePolicy, SolveOptions, SolveReport,
     Solved, DEFAULT_SPIN_ANGLE, STALL_WINDOW,

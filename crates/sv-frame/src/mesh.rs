@@ -166,44 +166,87 @@ impl QuadMesh {
             .collect()
     }
 
-    /// Conical residual (rad) at every interior vertex with four faces around it:
-    /// `|w1 - w2 + w3 - w4|`, the face angles at the vertex taken in cyclic order
-    /// (Pottmann and Wallner's angle balance; zero exactly for a conical vertex).
+    /// Conical residual (rad) at every interior vertex, with the faces around it in
+    /// cyclic order:
+    /// - four faces: `|w1 - w2 + w3 - w4|`, the face angles at the vertex (Pottmann and
+    ///   Wallner's angle balance; zero exactly for a conical vertex);
+    /// - three faces: always conical (three normals lie on a circle of the Gauss sphere), 0;
+    /// - `n >= 5` faces: the face normals must lie on one circle of the Gauss sphere (a
+    ///   cone of normals, `n - 3` conditions): the largest angle between a normal and the
+    ///   best-fit cone (axis `a`, half-angle `acos c` minimising `sum (n_i . a - c)^2`).
     pub fn conical_residuals(&self) -> Vec<(usize, Real)> {
-        // per vertex: (face, angle at the vertex, incoming neighbour, outgoing neighbour)
-        let mut around: HashMap<usize, Vec<(Real, usize, usize)>> = HashMap::new();
-        for face in &self.faces {
+        let mut out: Vec<(usize, Real)> = self
+            .interior_fans()
+            .into_iter()
+            .map(|(v, fan)| (v, self.fan_conical_residual(v, &fan)))
+            .collect();
+        out.sort_by_key(|&(v, _)| v);
+        out
+    }
+
+    /// Every interior vertex with its closed fan of `(face, corner)` pairs in cyclic order
+    /// (each face's outgoing neighbour is the next face's incoming one). Vertices on the
+    /// boundary or with a fan that does not close are left out.
+    pub fn interior_fans(&self) -> Vec<(usize, Vec<(usize, usize)>)> {
+        let mut around: HashMap<usize, Vec<(usize, usize)>> = HashMap::new();
+        for (f, face) in self.faces.iter().enumerate() {
             for k in 0..4 {
-                let v = face[k];
-                let (i, o) = (face[(k + 3) % 4], face[(k + 1) % 4]);
-                let p = self.vertices[v];
-                let (a, b) = (self.vertices[i] - p, self.vertices[o] - p);
-                let angle = a.angle(&b);
-                around.entry(v).or_default().push((angle, i, o));
+                around.entry(face[k]).or_default().push((f, k));
             }
         }
         let mut out = Vec::new();
-        for (v, fans) in around {
-            if fans.len() != 4 {
-                continue;
-            }
-            // walk: the next face's incoming neighbour is this face's outgoing one
-            let mut order = vec![0usize];
-            while order.len() < 4 {
-                let last = fans[*order.last().unwrap_or(&0)];
-                match fans.iter().position(|f| f.1 == last.2) {
-                    Some(next) if !order.contains(&next) => order.push(next),
+        for (v, corners) in around {
+            let next_of = |(f, k): (usize, usize)| self.faces[f][(k + 1) % 4];
+            let prev_of = |(f, k): (usize, usize)| self.faces[f][(k + 3) % 4];
+            let mut order = vec![corners[0]];
+            while order.len() < corners.len() {
+                let out_nb = next_of(*order.last().unwrap_or(&corners[0]));
+                match corners.iter().find(|&&c| prev_of(c) == out_nb) {
+                    Some(&c) if !order.contains(&c) => order.push(c),
                     _ => break,
                 }
             }
-            if order.len() != 4 || fans[order[3]].2 != fans[order[0]].1 {
-                continue; // boundary vertex or not a closed fan
+            let closed = order.len() == corners.len()
+                && next_of(order[order.len() - 1]) == prev_of(order[0]);
+            if closed && order.len() >= 3 {
+                out.push((v, order));
             }
-            let w: Vec<Real> = order.iter().map(|&i| fans[i].0).collect();
-            out.push((v, (w[0] - w[1] + w[2] - w[3]).abs()));
         }
-        out.sort_by_key(|&(v, _)| v);
+        out.sort_by_key(|(v, _)| *v);
         out
+    }
+
+    /// Conical residual at `v` with its closed fan (see [`QuadMesh::conical_residuals`]).
+    fn fan_conical_residual(&self, v: usize, fan: &[(usize, usize)]) -> Real {
+        let p = self.vertices[v];
+        match fan.len() {
+            3 => 0.0,
+            4 => {
+                let w: Vec<Real> = fan
+                    .iter()
+                    .map(|&(f, k)| {
+                        let face = self.faces[f];
+                        let a = self.vertices[face[(k + 3) % 4]] - p;
+                        let b = self.vertices[face[(k + 1) % 4]] - p;
+                        a.angle(&b)
+                    })
+                    .collect();
+                (w[0] - w[1] + w[2] - w[3]).abs()
+            }
+            _ => {
+                let normals: Vec<Vector3> = fan
+                    .iter()
+                    .map(|&(f, _)| {
+                        let q = self.face_points(f);
+                        (q[0] - q[2])
+                            .cross(&(q[1] - q[3]))
+                            .try_normalize(1e-300)
+                            .unwrap_or_else(Vector3::zeros)
+                    })
+                    .collect();
+                normal_cone_residual(&normals)
+            }
+        }
     }
 
     /// Check everything a frame needs: finite coordinates, indices in range, no degenerate
@@ -296,6 +339,33 @@ impl QuadMesh {
         }
         Ok(())
     }
+}
+
+/// Largest angle (rad) between a unit normal and the cone of normals that fits them best:
+/// axis `a` (unit) and `c` minimising `sum (n_i . a - c)^2`, i.e. `a` the eigenvector of
+/// the smallest eigenvalue of the normals' covariance and `c` the mean of `n_i . a`. Zero
+/// exactly when the normals lie on one circle of the Gauss sphere.
+pub fn normal_cone_residual(normals: &[Vector3]) -> Real {
+    if normals.len() < 4 {
+        return 0.0;
+    }
+    let mean = normals.iter().sum::<Vector3>() / normals.len() as Real;
+    let mut cov = sv_geom::Matrix3::zeros();
+    for n in normals {
+        let d = n - mean;
+        cov += d * d.transpose();
+    }
+    let eig = cov.symmetric_eigen();
+    let k = (0..3)
+        .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
+        .unwrap_or(0);
+    let axis: Vector3 = eig.eigenvectors.column(k).into();
+    let c = mean.dot(&axis).clamp(-1.0, 1.0);
+    let half = c.acos();
+    normals
+        .iter()
+        .map(|n| (n.dot(&axis).clamp(-1.0, 1.0).acos() - half).abs())
+        .fold(0.0, Real::max)
 }
 
 #[cfg(test)]
@@ -411,5 +481,50 @@ mod tests {
             QuadMesh::default().validate(&Default::default()),
             Err(MeshError::Empty)
         );
+    }
+
+    /// A vertex with `n` faces at the apex of a right cone: ring points and outer points
+    /// on the cone, so every face normal makes the same angle with the axis.
+    fn cone_star(n: usize) -> QuadMesh {
+        let mut m = QuadMesh::default();
+        m.vertices.push(Point3::new(0.0, 0.0, 300.0));
+        let ang = |k: usize| 2.0 * std::f64::consts::PI * k as Real / n as Real;
+        for k in 0..n {
+            let (s, c) = ang(k).sin_cos();
+            m.vertices.push(Point3::new(300.0 * c, 300.0 * s, 200.0));
+        }
+        for k in 0..n {
+            let (s, c) = (ang(k) + std::f64::consts::PI / n as Real).sin_cos();
+            let r = 300.0 / (std::f64::consts::PI / n as Real).cos();
+            m.vertices.push(Point3::new(r * c, r * s, 200.0));
+        }
+        for k in 0..n {
+            m.faces.push([0, 1 + k, 1 + n + k, 1 + (k + 1) % n]);
+        }
+        m
+    }
+
+    #[test]
+    fn conical_residual_at_any_valence() {
+        for n in [3, 4, 5, 6] {
+            let mut m = cone_star(n);
+            // a cone of revolution: conical at any valence (faces planar: the outer
+            // point lies in the plane of apex and ring)
+            let c = m.conical_residuals();
+            assert_eq!(c.len(), 1, "valence {n}: {c:?}");
+            assert_eq!(c[0].0, 0);
+            assert!(c[0].1 < 1e-9, "valence {n}: {c:?}");
+            // move one ring point: three normals still lie on a circle, more do not
+            m.vertices[1].y += 80.0;
+            m.vertices[1].z += 80.0;
+            let r = m.conical_residuals()[0].1;
+            if n == 3 {
+                assert_eq!(r, 0.0);
+            } else {
+                assert!(r > 1e-3, "valence {n}: {r}");
+            }
+        }
+        // boundary vertices have no conical condition
+        assert!(QuadMesh::grid(1, 1, 100.0).conical_residuals().is_empty());
     }
 }

@@ -8,7 +8,8 @@
 //! - Hub mesh, OBJ quads (mm): [`read_quad_obj`], [`read_quad_obj_bytes`],
 //!   [`read_and_validate_quad_obj`] (adds [`sv_frame::QuadMesh::validate`]),
 //!   [`write_quad_obj`] (round-trips every `f64` exactly).
-//! - Target surface, [`TriMesh`] from OBJ, ASCII STL or binary STL: [`read_tri_mesh`].
+//! - Target surface, [`TriMesh`] from OBJ, ASCII STL or binary STL: [`read_tri_mesh`];
+//!   [`read_target`] also welds, orients and checks it, naming the file's lines.
 //! - `frame.json` v1 (model.md): [`frame_to_json`], [`frame_from_json`] (checks the
 //!   header, shapes, finiteness and indices, naming the JSON path).
 //! - The frame for Rhino as OBJ (objects `hubs`, `primary`, `legs`): [`frame_to_obj`].
@@ -35,6 +36,7 @@ mod frame_obj;
 mod obj;
 mod quad_obj;
 mod stl;
+mod target;
 mod text;
 mod tri_mesh;
 
@@ -46,4 +48,5 @@ pub use frame_obj::frame_to_obj;
 pub use quad_obj::{
     read_and_validate_quad_obj, read_quad_obj, read_quad_obj_bytes, write_quad_obj,
 };
+pub use target::{read_target, TargetFile, TargetRepairs};
 pub use tri_mesh::{read_tri_mesh, TriMesh, WELD_RELATIVE_TOLERANCE};

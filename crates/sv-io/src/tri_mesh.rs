@@ -115,6 +115,38 @@ pub fn read_tri_mesh(bytes: &[u8], name: &str) -> Result<TriMesh, IoError> {
     })
 }
 
+/// [`weld_soup`], also returning the soup corner `(triangle, corner)` that each welded
+/// vertex was first seen at and the soup triangles dropped because they collapse.
+pub(crate) fn weld_indexed(
+    soup: &[[Point3; 3]],
+    relative_tolerance: f64,
+) -> (TriMesh, Vec<(usize, usize)>, Vec<usize>) {
+    let (vertices, corners) = weld_map(soup, relative_tolerance);
+    let mut first = vec![(usize::MAX, 0); vertices.len()];
+    let mut triangles = Vec::with_capacity(soup.len());
+    let mut dropped = Vec::new();
+    for (t, tri) in corners.iter().enumerate() {
+        for (k, &v) in tri.iter().enumerate() {
+            if first[v].0 == usize::MAX {
+                first[v] = (t, k);
+            }
+        }
+        if tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2] {
+            triangles.push(*tri);
+        } else {
+            dropped.push(t);
+        }
+    }
+    (
+        TriMesh {
+            vertices,
+            triangles,
+        },
+        first,
+        dropped,
+    )
+}
+
 /// [`weld_soup`] at [`WELD_RELATIVE_TOLERANCE`], refusing a mesh with nothing left.
 fn welded(soup: &[[Point3; 3]], name: &str) -> Result<TriMesh, IoError> {
     let mesh = weld_soup(soup, WELD_RELATIVE_TOLERANCE);
@@ -134,9 +166,22 @@ fn welded(soup: &[[Point3; 3]], name: &str) -> Result<TriMesh, IoError> {
 /// diagonal (the first corner seen represents the others) and drop triangles that
 /// collapse. Corners must be finite.
 pub(crate) fn weld_soup(soup: &[[Point3; 3]], relative_tolerance: f64) -> TriMesh {
+    let (vertices, corners) = weld_map(soup, relative_tolerance);
+    let triangles = corners
+        .into_iter()
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .collect();
+    TriMesh {
+        vertices,
+        triangles,
+    }
+}
+
+/// The welded vertices of a soup and the welded index of every corner.
+fn weld_map(soup: &[[Point3; 3]], relative_tolerance: f64) -> (Vec<Point3>, Vec<[usize; 3]>) {
     let corners = || soup.iter().flatten();
     let Some(first) = corners().next() else {
-        return TriMesh::default();
+        return (Vec::new(), Vec::new());
     };
     let (mut lo, mut hi) = (*first, *first);
     for p in corners() {
@@ -182,17 +227,11 @@ pub(crate) fn weld_soup(soup: &[[Point3; 3]], relative_tolerance: f64) -> TriMes
             vertices.len() - 1
         })
     };
-    let mut triangles = Vec::with_capacity(soup.len());
-    for t in soup {
-        let tri = [index_of(&t[0]), index_of(&t[1]), index_of(&t[2])];
-        if tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2] {
-            triangles.push(tri);
-        }
-    }
-    TriMesh {
-        vertices,
-        triangles,
-    }
+    let corners: Vec<[usize; 3]> = soup
+        .iter()
+        .map(|t| [index_of(&t[0]), index_of(&t[1]), index_of(&t[2])])
+        .collect();
+    (vertices, corners)
 }
 
 #[cfg(test)]

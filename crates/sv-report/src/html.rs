@@ -287,6 +287,12 @@ fn quality_table(input: &ReportInput<'_>) -> String {
 
 fn frame_section(input: &ReportInput<'_>) -> String {
     let e = input.frame.params.expansion;
+    let unmet = input.hub_mesh.is_some_and(|m| !m.unmet.is_empty());
+    let goals_radio = if unmet {
+        "\n<label><input type=\"radio\" name=\"colour\" value=\"goals\"> unmet goals</label>"
+    } else {
+        ""
+    };
     format!(
         r#"<section id="frame"><h2>The frame</h2>
 <div class="frame"><div id="view" aria-label="3D view of the frame"></div>
@@ -294,7 +300,7 @@ fn frame_section(input: &ReportInput<'_>) -> String {
 <fieldset><legend>Colour by</legend>
 <label><input type="radio" name="colour" value="gap" checked> gap</label>
 <label><input type="radio" name="colour" value="overlap"> hub overlap</label>
-<label><input type="radio" name="colour" value="strip"> strip</label></fieldset>
+<label><input type="radio" name="colour" value="strip"> strip</label>{goals_radio}</fieldset>
 <div id="legend"></div>
 <fieldset style="margin-top:10px"><legend>Show</legend>
 <label><input type="checkbox" data-layer="hubs" checked> hubs</label>
@@ -570,10 +576,81 @@ fn view_data(input: &ReportInput<'_>) -> Value {
     json!({
         "units": units,
         "links": links,
+        "goals": goal_flags(input),
         "expansion": input.frame.params.expansion,
         "background": VIEW_BACKGROUND,
         "colour_map": COLOUR_MAP,
     })
+}
+
+/// Per unit, the hub mesh goals not met there (empty lists when all hold): faces whose
+/// planarity, sides or edge ratio miss the goal, the faces around vertices whose conical
+/// residual does, and the faces at the worst vertex of the distance goals the report
+/// names. Empty when the build met every goal.
+fn goal_flags(input: &ReportInput<'_>) -> Value {
+    let Some(m) = input.hub_mesh.filter(|m| !m.unmet.is_empty()) else {
+        return Value::Array(Vec::new());
+    };
+    let frame = input.frame;
+    let mesh = QuadMesh {
+        vertices: frame
+            .mesh
+            .vertices
+            .iter()
+            .map(|p| Point3::new(p[0], p[1], p[2]))
+            .collect(),
+        faces: frame.mesh.faces.clone(),
+    };
+    let goals = sv_surface::Goals::default();
+    let unmet = |prefix: &str| m.unmet.iter().any(|l| l.starts_with(prefix));
+    let mut flags: Vec<Vec<&str>> = vec![Vec::new(); mesh.faces.len()];
+    let planarity = mesh.planarity_residuals();
+    for f in 0..mesh.faces.len() {
+        if unmet("planarity") && planarity[f] > goals.planarity {
+            flags[f].push("planarity");
+        }
+        let p = mesh.face_points(f);
+        let e = [0, 1, 2, 3].map(|k| (p[(k + 1) % 4] - p[k]).norm());
+        let (lo, hi) = e
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+        if unmet("faces with edge ratio") && hi > sv_surface::EDGE_RATIO_LIMIT * lo {
+            flags[f].push("edge ratio");
+        }
+        let unit = m.unit_size;
+        let (a, b) = goals.side_range;
+        if unmet("face sides") && (lo < a * unit || hi > b * unit) {
+            flags[f].push("face sides");
+        }
+    }
+    let mut at_vertex = |v: usize, goal: &'static str| {
+        for (f, face) in mesh.faces.iter().enumerate() {
+            if face.contains(&v) && !flags[f].contains(&goal) {
+                flags[f].push(goal);
+            }
+        }
+    };
+    if unmet("conical") {
+        for (v, r) in mesh.conical_residuals() {
+            if r.to_degrees() > goals.conical_deg {
+                at_vertex(v, "conical");
+            }
+        }
+    }
+    if unmet("distance to target") {
+        at_vertex(m.closeness_worst_vertex, "distance to target");
+    }
+    if unmet("distance to boundary") {
+        at_vertex(m.boundary_worst_vertex, "distance to boundary");
+    }
+    let by_face: std::collections::HashMap<usize, &Vec<&str>> = flags.iter().enumerate().collect();
+    Value::Array(
+        frame
+            .units
+            .iter()
+            .map(|u| json!(by_face.get(&u.face).map_or(&Vec::new(), |v| *v)))
+            .collect(),
+    )
 }
 
 /// Text for a raw-text `<script>` element: `</script` and `<!--` cannot occur in it.

@@ -60,7 +60,11 @@ const MODES = {
     values: overlapMin,
   },
   strip: { title: 'strip' },
+  goals: { title: 'hub mesh goals not met here (red)' },
 };
+const GOAL_RED = '#d62728';
+const GOAL_GREY = '#c9ccd1';
+const goals = data.goals || [];
 
 let view = null;
 let mode = 'gap';
@@ -72,6 +76,13 @@ function legend(m) {
   title.className = 'legend-title';
   title.textContent = MODES[m].title;
   el.append(title);
+  if (m === 'goals') {
+    const p = document.createElement('div');
+    const n = goals.filter((g) => g.length).length;
+    p.textContent = `${n} unit(s) where a goal is not met`;
+    el.append(p);
+    return;
+  }
   if (m === 'strip') {
     const p = document.createElement('div');
     p.className = 'legend-strips';
@@ -109,6 +120,8 @@ function setMode(m) {
   if (!view) return;
   if (m === 'strip') {
     view.setColours((id) => stripColour(units[byId.get(id)].strip));
+  } else if (m === 'goals') {
+    view.setColours((id) => ((goals[byId.get(id)] || []).length ? GOAL_RED : GOAL_GREY));
   } else {
     const values = MODES[m].values;
     const [lo, hi] = range(values);
@@ -150,6 +163,7 @@ function select(id) {
     ['depth', u.depth == null ? '-' : `${fmt(u.depth, 1)} mm`],
     ['largest gap', `${fmt(gapMax[i], 2)} mm`],
     ['smallest hub overlap', `${fmt(overlapMin[i], 2)} mm`],
+    ...((goals[i] || []).length ? [['goals not met', goals[i].join(', ')]] : []),
   ]) {
     const tr = document.createElement('tr');
     const th = document.createElement('th');

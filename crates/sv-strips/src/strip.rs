@@ -93,9 +93,118 @@ pub fn apply_labels(frame: &mut FrameFile, strips: &[FlatStrip]) {
     }
 }
 
+/// The mesh vertex at corner `c` of every unit (corner `c` joins sides `c - 1` and `c`),
+/// found through the links alone: crossing side `c` of `f` into side `m` of `g`, the same
+/// vertex is corner `m + 1` of `g`. Returns the vertex of every corner, and per vertex its
+/// number of units and whether the fan around it closes (an interior vertex).
+fn corner_vertices(tiles: &TileSet) -> (Vec<[usize; 4]>, Vec<(usize, bool)>) {
+    let n = tiles.len();
+    let mut vertex = vec![[usize::MAX; 4]; n];
+    let mut fans = Vec::new();
+    for f in 0..n {
+        for c in 0..4 {
+            if vertex[f][c] != usize::MAX {
+                continue;
+            }
+            let id = fans.len();
+            // walk one way until back or open, then the other way from the start
+            let mut count = 0;
+            let mut closed = false;
+            let (mut g, mut k) = (f, c);
+            loop {
+                if vertex[g][k] == id {
+                    closed = true;
+                    break;
+                }
+                vertex[g][k] = id;
+                count += 1;
+                match tiles.across[g][k] {
+                    Some((h, m)) => (g, k) = (h, (m + 1) % 4),
+                    None => break,
+                }
+            }
+            if !closed {
+                // the other way: across side c - 1, the vertex is corner m of the neighbour
+                let (mut g, mut k) = (f, c);
+                while let Some((h, m)) = tiles.across[g][(k + 3) % 4] {
+                    if vertex[h][m] == id {
+                        break;
+                    }
+                    vertex[h][m] = id;
+                    count += 1;
+                    (g, k) = (h, m);
+                }
+            }
+            fans.push((count, closed));
+        }
+    }
+    (vertex, fans)
+}
+
+/// Sides where strips must end: a path of mesh edges from every interior vertex of odd
+/// valence (3, 5, ...) to the boundary or to another such vertex. Around an odd vertex the
+/// two strip directions swap (a strip that went round it would come back crossing its
+/// own sides), so some strips must end there; the path is where they end.
+fn seams(tiles: &TileSet) -> Vec<[bool; 4]> {
+    let n = tiles.len();
+    let (vertex, fans) = corner_vertices(tiles);
+    let nv = fans.len();
+    // edges between vertices: side k of f joins corners k and k + 1
+    let mut edges: Vec<Vec<(usize, usize, usize)>> = vec![Vec::new(); nv];
+    for f in 0..n {
+        for k in 0..4 {
+            let (a, b) = (vertex[f][k], vertex[f][(k + 1) % 4]);
+            edges[a].push((b, f, k));
+            edges[b].push((a, f, k));
+        }
+    }
+    let odd: Vec<bool> = fans
+        .iter()
+        .map(|&(c, closed)| closed && c % 2 == 1)
+        .collect();
+    let boundary: Vec<bool> = fans.iter().map(|&(_, closed)| !closed).collect();
+    let mut done = vec![false; nv];
+    let mut seam = vec![[false; 4]; n];
+    for start in 0..nv {
+        if !odd[start] || done[start] {
+            continue;
+        }
+        done[start] = true;
+        // breadth first to the boundary or to another odd vertex not yet joined
+        let mut from: Vec<Option<(usize, usize, usize)>> = vec![None; nv];
+        let mut seen = vec![false; nv];
+        seen[start] = true;
+        let mut queue = std::collections::VecDeque::from([start]);
+        let mut end = None;
+        while let Some(v) = queue.pop_front() {
+            if v != start && (boundary[v] || (odd[v] && !done[v])) {
+                end = Some(v);
+                break;
+            }
+            for &(w, f, k) in &edges[v] {
+                if !seen[w] {
+                    seen[w] = true;
+                    from[w] = Some((v, f, k));
+                    queue.push_back(w);
+                }
+            }
+        }
+        let Some(mut v) = end else { continue };
+        done[v] = true;
+        while let Some((u, f, k)) = from[v] {
+            seam[f][k] = true;
+            if let Some((g, m)) = tiles.across[f][k] {
+                seam[g][m] = true;
+            }
+            v = u;
+        }
+    }
+    seam
+}
+
 /// Per unit, which side parity (0: sides 0/2, 1: sides 1/3) the strips cross, propagated
-/// over the mesh from the lowest unit of each connected piece.
-fn chain_parity(tiles: &TileSet, direction: StripDirection) -> Vec<usize> {
+/// breadth first over the links from the lowest unit of each piece, never across a seam.
+fn chain_parity(tiles: &TileSet, seam: &[[bool; 4]], direction: StripDirection) -> Vec<usize> {
     let n = tiles.len();
     let mut axis = vec![usize::MAX; n];
     for seed in 0..n {
@@ -103,13 +212,16 @@ fn chain_parity(tiles: &TileSet, direction: StripDirection) -> Vec<usize> {
             continue;
         }
         axis[seed] = 1; // U crosses sides 1 and 3 of the seed
-        let mut stack = vec![seed];
-        while let Some(f) = stack.pop() {
+        let mut queue = std::collections::VecDeque::from([seed]);
+        while let Some(f) = queue.pop_front() {
             for k in 0..4 {
+                if seam[f][k] {
+                    continue;
+                }
                 if let Some((g, m)) = tiles.across[f][k] {
                     if axis[g] == usize::MAX {
                         axis[g] = if k % 2 == axis[f] { m % 2 } else { (m + 1) % 2 };
-                        stack.push(g);
+                        queue.push_back(g);
                     }
                 }
             }
@@ -123,12 +235,19 @@ fn chain_parity(tiles: &TileSet, direction: StripDirection) -> Vec<usize> {
 
 /// Partition the units into chains along `direction` (before splitting): each chain enters
 /// a unit through one side and leaves it through the opposite side. Chains are ordered by
-/// their lowest unit index; a closed ring starts at its lowest unit.
+/// their lowest unit index; a closed ring starts at its lowest unit. Nothing assumes a
+/// grid: on a mesh with irregular vertices the chains end on a path of edges from every
+/// vertex of odd valence to the boundary (see [`seams`]), and wherever the direction
+/// propagated over the links does not agree.
 pub fn chains(tiles: &TileSet, direction: StripDirection) -> Vec<Vec<usize>> {
     let n = tiles.len();
-    let parity = chain_parity(tiles, direction);
+    let seam = seams(tiles);
+    let parity = chain_parity(tiles, &seam, direction);
     // neighbour when leaving f through side k, if the step stays in the chain direction
     let step = |f: usize, k: usize| -> Option<(usize, usize)> {
+        if seam[f][k] {
+            return None;
+        }
         let (g, m) = tiles.across[f][k]?;
         (k % 2 == parity[f] && m % 2 == parity[g]).then_some((g, m))
     };

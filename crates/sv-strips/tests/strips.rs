@@ -410,3 +410,80 @@ fn bad_parameters_name_the_parameter() {
     .unwrap_err();
     assert!(e.to_string().contains("max_length"), "{e}");
 }
+
+/// A flat 6 x 6 grid of 300 mm squares in which the edge between the faces of column 2,
+/// rows 1 and 2 is turned: two interior vertices get three faces, one five. Returns the
+/// mesh and the interior vertices of odd valence.
+fn irregular_grid() -> (QuadMesh, Vec<usize>) {
+    let n = 6;
+    let id = |i: usize, j: usize| j * (n + 1) + i;
+    let mut m = QuadMesh::grid(n, n, 300.0);
+    let (a, b, c, d, e, f) = (id(2, 1), id(3, 1), id(3, 2), id(3, 3), id(2, 3), id(2, 2));
+    m.vertices[f].x -= 60.0;
+    m.vertices[c].x += 60.0;
+    let cell = |i: usize, j: usize| j * n + i;
+    let (lower, upper) = (cell(2, 1), cell(2, 2));
+    m.faces[lower] = [a, b, e, f];
+    m.faces[upper] = [b, c, d, e];
+    (m, vec![c, e, f])
+}
+
+#[test]
+fn strips_end_at_vertices_of_odd_valence_on_an_irregular_mesh() {
+    let (mesh, odd) = irregular_grid();
+    let f = frame(&mesh);
+    let tiles = TileSet::from_frame(&f).unwrap();
+    for direction in [StripDirection::U, StripDirection::V] {
+        let chains = sv_strips::chains(&tiles, direction);
+        // every unit in exactly one chain
+        let mut count = vec![0; tiles.len()];
+        for c in &chains {
+            for &u in c {
+                count[u] += 1;
+            }
+        }
+        assert!(count.iter().all(|&c| c == 1), "{direction:?}: {count:?}");
+        // each step enters through one side and leaves through the opposite one
+        for c in &chains {
+            for w in c.windows(3) {
+                let into = (0..4).find(|&k| tiles.across[w[1]][k].map(|x| x.0) == Some(w[0]));
+                let out = (0..4).find(|&k| tiles.across[w[1]][k].map(|x| x.0) == Some(w[2]));
+                let (Some(i), Some(o)) = (into, out) else {
+                    panic!("{direction:?}: chain step without a link: {w:?}")
+                };
+                assert_eq!(
+                    (i + 2) % 4,
+                    o,
+                    "{direction:?}: chain {c:?} turns at unit {}",
+                    w[1]
+                );
+            }
+        }
+        // at each odd vertex a chain ends in one of the faces around it
+        for &v in &odd {
+            let around: Vec<usize> = (0..mesh.faces.len())
+                .filter(|&g| mesh.faces[g].contains(&v))
+                .collect();
+            let ends = chains
+                .iter()
+                .any(|c| around.contains(&c[0]) || around.contains(&c[c.len() - 1]));
+            assert!(
+                ends,
+                "{direction:?}: no strip ends at vertex {v}: {chains:?}"
+            );
+        }
+        // and the whole frame unrolls, every unit in one strip
+        let options = StripOptions {
+            direction,
+            ..Default::default()
+        };
+        let strips = unroll(&f, &options).unwrap();
+        let mut placed: Vec<usize> = strips.iter().flat_map(|s| s.units.clone()).collect();
+        placed.sort_unstable();
+        assert_eq!(
+            placed,
+            (0..tiles.len()).collect::<Vec<_>>(),
+            "{direction:?}"
+        );
+    }
+}

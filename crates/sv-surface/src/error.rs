@@ -21,6 +21,13 @@ pub enum SurfaceError {
     /// The target is too small for even a 2 x 2 grid at the requested unit size.
     #[error("target too small: {0}")]
     TooSmall(String),
+    /// The target is valid but the automatic layout cannot mesh it; a designer's layout
+    /// (`--layout`) can.
+    #[error("no automatic layout: {0}")]
+    NeedsLayout(String),
+    /// A designer's layout (coarse quad mesh) that cannot be used on the target.
+    #[error("invalid layout: {0}")]
+    InvalidLayout(String),
     /// The optimisation produced a collapsed edge or a flipped face and could not recover.
     #[error("optimisation failed: {0}")]
     Folded(String),

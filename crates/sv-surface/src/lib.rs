@@ -8,7 +8,11 @@
 //! - [`initial_grid`]: a quad grid at the unit size whose outer ring follows the boundary
 //!   and whose lattice follows the conformal map of the target onto a rectangle;
 //! - [`optimise`]: guided projection (Gauss-Newton with auxiliary face normals);
-//! - [`build_secondary`]: both in one call, returning the mesh and a [`SecondaryReport`].
+//! - [`build_secondary`]: both in one call, returning the mesh and a [`SecondaryReport`];
+//! - [`layout_mesh`], [`build_secondary_with_layout`]: the designer's coarse quad layout
+//!   (irregular vertices where the designer wants them) subdivided to the unit size;
+//! - [`TargetIndex`]: closest points on the target and its boundary loops;
+//!   [`measure_hub_mesh`]: the goals of a hub mesh on a target.
 //!
 //! ```
 //! use sv_surface::{build_secondary, builtin_target, SecondaryOptions};
@@ -21,6 +25,7 @@
 
 mod builtin;
 mod error;
+mod layout;
 mod optimise;
 mod options;
 mod param;
@@ -31,11 +36,12 @@ mod topology;
 
 pub use builtin::{builtin_target, BUILTIN_NAMES, DEFAULT_BUILTIN};
 pub use error::SurfaceError;
+pub use layout::layout_mesh;
 pub use optimise::optimise;
 pub use options::SecondaryOptions;
 pub use param::initial_grid;
-pub use report::{Goals, SecondaryReport, EDGE_RATIO_LIMIT};
-pub use target::TargetMesh;
+pub use report::{measure_hub_mesh, Goals, SecondaryReport, EDGE_RATIO_LIMIT};
+pub use target::{BoundaryPoint, ClosestPoint, TargetIndex, TargetMesh};
 
 use sv_frame::QuadMesh;
 
@@ -49,5 +55,26 @@ pub fn build_secondary(
     opts.check()?;
     let index = target::TargetIndex::new(target)?;
     let grid = param::initial_grid_indexed(&index, opts)?;
-    optimise::optimise_indexed(&index, grid, opts, progress)
+    optimise::optimise_indexed(&index, grid, opts, optimise::Pins::Corners, progress)
+}
+
+/// Target surface and the designer's coarse quad layout to optimised hub mesh:
+/// [`layout_mesh`] (subdivided to the unit size, the layout's irregular vertices kept)
+/// then [`optimise`].
+pub fn build_secondary_with_layout(
+    target: &TargetMesh,
+    layout: &QuadMesh,
+    opts: &SecondaryOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<(QuadMesh, SecondaryReport), SurfaceError> {
+    opts.check()?;
+    let index = target::TargetIndex::new(target)?;
+    let mesh = layout::layout_mesh_indexed(&index, layout, opts)?;
+    optimise::optimise_indexed(
+        &index,
+        mesh,
+        opts,
+        optimise::Pins::CornersAndIrregular,
+        progress,
+    )
 }

@@ -9,7 +9,7 @@
 use sv_frame::QuadMesh;
 use sv_geom::{quad_diagonal_distance, Point3, Real, Vector3};
 
-use crate::report::{conical_residuals, measure, Goals, SecondaryReport};
+use crate::report::{measure, Goals, SecondaryReport};
 use crate::sparse::SpdSolver;
 use crate::target::TargetIndex;
 use crate::topology::Topology;
@@ -131,16 +131,33 @@ pub fn optimise(
 ) -> Result<(QuadMesh, SecondaryReport), SurfaceError> {
     opts.check()?;
     let index = TargetIndex::new(target)?;
-    optimise_indexed(&index, initial, opts, progress)
+    optimise_indexed(&index, initial, opts, Pins::Corners, progress)
+}
+
+/// Which vertices stay where they start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Pins {
+    /// Boundary vertices with other than two faces (the corners of the layout).
+    Corners,
+    /// Those and the interior vertices with other than four faces: a designer's layout
+    /// puts its irregular vertices where they are wanted.
+    CornersAndIrregular,
 }
 
 pub(crate) fn optimise_indexed(
     index: &TargetIndex<'_>,
     initial: QuadMesh,
     opts: &SecondaryOptions,
+    pins: Pins,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<(QuadMesh, SecondaryReport), SurfaceError> {
     let topo = Topology::new(&initial)?;
+    let mut pinned = topo.corner.clone();
+    if pins == Pins::CornersAndIrregular {
+        for s in topo.stars.iter().filter(|s| s.faces.len() != 4) {
+            pinned[s.vertex] = true;
+        }
+    }
     if initial.faces.is_empty() {
         return Err(SurfaceError::InvalidParameter(
             "the initial mesh has no faces".into(),
@@ -164,7 +181,11 @@ pub(crate) fn optimise_indexed(
     let to_world =
         |x: &[Real], v: usize| centre + Vector3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2]) * scale;
     let nbase = 3 * nv;
-    let n = nbase + 3 * nf;
+    // vertices with five or more faces carry a cone of normals: axis (3) and cosine (1)
+    let cones: Vec<&crate::topology::Star> =
+        topo.stars.iter().filter(|s| s.faces.len() >= 5).collect();
+    let cbase = nbase + 3 * nf;
+    let n = cbase + 4 * cones.len();
     let mut x = vec![0.0; n];
     for (v, p) in initial.vertices.iter().enumerate() {
         let d = (p - centre) / scale;
@@ -196,6 +217,16 @@ pub(crate) fn optimise_indexed(
         let nrm = g.normalize();
         x[nbase + 3 * f..nbase + 3 * f + 3].copy_from_slice(nrm.as_slice());
     }
+    for (c, star) in cones.iter().enumerate() {
+        let normals: Vec<Vector3> = star
+            .faces
+            .iter()
+            .map(|&(f, _)| Vector3::from_column_slice(&x[nbase + 3 * f..nbase + 3 * f + 3]))
+            .collect();
+        let (axis, cosine) = normal_cone(&normals);
+        x[cbase + 4 * c..cbase + 4 * c + 3].copy_from_slice(axis.as_slice());
+        x[cbase + 4 * c + 3] = cosine;
+    }
 
     let mut system = System::new(n);
     let mut solver: Option<SpdSolver> = None;
@@ -205,6 +236,7 @@ pub(crate) fn optimise_indexed(
     let (mut cols, mut vals) = (Vec::with_capacity(16), Vec::with_capacity(16));
     let mut dx = vec![0.0; n];
     let mut hard: Real = 1.0;
+    let goals = Goals::default();
     for it in 0..opts.max_iterations {
         iterations = it + 1;
         let decay = (0.5f64).powf(it as Real / 10.0).max(0.1);
@@ -234,9 +266,13 @@ pub(crate) fn optimise_indexed(
             system.row(&cols, &vals, nf_.norm_squared() - 1.0, w_plan);
         }
         // conical: angle balance w0 - w1 + w2 - w3 = 0 at interior valence-4 vertices
-        for star in &topo.stars {
+        for star in topo.stars.iter().filter(|s| s.faces.len() == 4) {
             let v = star.vertex;
-            let nb = star.faces.map(|(f, k)| faces[f][(k + 1) % 4]);
+            let nb: Vec<usize> = star
+                .faces
+                .iter()
+                .map(|&(f, k)| faces[f][(k + 1) % 4])
+                .collect();
             let pv = pos(&x, v);
             cols.clear();
             vals.clear();
@@ -270,6 +306,27 @@ pub(crate) fn optimise_indexed(
             }
             system.row(&cols, &vals, r, w_cone);
         }
+        // conical at five or more faces: the face normals on one circle of the Gauss
+        // sphere, n_f . a = c with |a| = 1 (valence 3 is always conical)
+        for (c, star) in cones.iter().enumerate() {
+            let ia = cbase + 4 * c;
+            let axis = pos(&x[ia..], 0);
+            let cosine = x[ia + 3];
+            for &(f, _) in &star.faces {
+                let nf_ = pos(&x[nbase..], f);
+                cols.clear();
+                vals.clear();
+                push3(&mut cols, &mut vals, nbase + 3 * f, &axis);
+                push3(&mut cols, &mut vals, ia, &nf_);
+                cols.push(ia + 3);
+                vals.push(-1.0);
+                system.row(&cols, &vals, nf_.dot(&axis) - cosine, w_cone);
+            }
+            cols.clear();
+            vals.clear();
+            push3(&mut cols, &mut vals, ia, &(axis * 2.0));
+            system.row(&cols, &vals, axis.norm_squared() - 1.0, w_cone);
+        }
         // closeness and boundary
         let mut far = 0.0f64;
         for v in 0..nv {
@@ -298,12 +355,13 @@ pub(crate) fn optimise_indexed(
                     push3(&mut cols, &mut vals, 3 * v, &u);
                     system.row(&cols, &vals, u.dot(&d), opts.boundary_weight);
                 }
-                // grid corners (one face) stay where the boundary turns most: pinned
-                if topo.corner[v] {
-                    let d = (p - initial_vertices[v]) / scale;
-                    for k in 0..3 {
-                        system.row(&[3 * v + k], &[1.0], d[k], 5.0 * opts.boundary_weight);
-                    }
+            }
+            // layout corners stay where the boundary turns most, a designer's irregular
+            // vertices where they were put: pinned
+            if pinned[v] {
+                let d = (p - initial_vertices[v]) / scale;
+                for k in 0..3 {
+                    system.row(&[3 * v + k], &[1.0], d[k], 5.0 * opts.boundary_weight);
                 }
             }
         }
@@ -460,8 +518,10 @@ pub(crate) fn optimise_indexed(
                 quad_diagonal_distance(&p) / mean
             })
             .fold(0.0, Real::max);
-        let cone = conical_residuals(&mesh, &topo)
+        let cone = mesh
+            .conical_residuals()
             .into_iter()
+            .map(|(_, r)| r)
             .fold(0.0, Real::max)
             .to_degrees();
         let hard_met = plan <= opts.planarity_tolerance && cone <= opts.conical_tolerance_deg;
@@ -478,8 +538,8 @@ pub(crate) fn optimise_indexed(
             .filter(|f| edge_ratio(&f.map(|v| pos(&x, v))) <= crate::EDGE_RATIO_LIMIT)
             .count() as Real
             / nf as Real;
-        let soft_met = far <= STOP_CLOSENESS * opts.closeness_tolerance
-            && square >= Goals::default().edge_ratio_fraction;
+        let soft_met =
+            far <= STOP_CLOSENESS * opts.closeness_tolerance && square >= goals.edge_ratio_fraction;
         // stalled: tiny steps while the hard weights no longer grow
         let stalled = step * max_move < 1e-3
             && max_move <= opts.max_step
@@ -492,11 +552,38 @@ pub(crate) fn optimise_indexed(
         vertices: (0..nv).map(|v| to_world(&x, v)).collect(),
         faces,
     };
-    let mut report = measure(&mesh, &topo, index, iterations, &Goals::default());
+    let mut report = measure(
+        &mesh,
+        &topo,
+        index,
+        iterations,
+        opts.unit_size,
+        &Goals::default(),
+    );
     if let Some(s) = stopped {
         report.unmet.push(s);
     }
     Ok((mesh, report))
+}
+
+/// Axis and cosine of the cone of unit normals that fits them best (see
+/// `sv_frame::normal_cone_residual`).
+fn normal_cone(normals: &[Vector3]) -> (Vector3, Real) {
+    let mean = normals.iter().sum::<Vector3>() / normals.len().max(1) as Real;
+    let mut cov = sv_geom::Matrix3::zeros();
+    for n in normals {
+        let d = n - mean;
+        cov += d * d.transpose();
+    }
+    let eig = cov.symmetric_eigen();
+    let k = (0..3)
+        .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
+        .unwrap_or(0);
+    let mut axis: Vector3 = eig.eigenvectors.column(k).into();
+    if axis.dot(&mean) < 0.0 {
+        axis = -axis;
+    }
+    (axis, mean.dot(&axis))
 }
 
 /// Longest over shortest edge of a quad.

@@ -102,6 +102,12 @@ pub(crate) fn initial_grid_indexed(
 ) -> Result<QuadMesh, SurfaceError> {
     let target = index.mesh;
     let h = opts.unit_size;
+    if index.loops.len() > 1 {
+        return Err(SurfaceError::NeedsLayout(format!(
+            "the target has {} boundary loops (holes); the automatic grid maps a patch with one boundary onto a rectangle: give the layout of the roof as a coarse quad mesh (--layout COARSE.obj, [surface] layout)",
+            index.loops.len()
+        )));
+    }
     let frame = target_frame(target);
     let lp = &index.boundary;
     let m = lp.len();
@@ -534,7 +540,7 @@ mod tests {
         // log maps the sector onto a rectangle phi wide and ln(r2 / r1) high
         let (phi, r1, r2) = (1.2, 1000.0, 2500.0);
         let (mesh, corner_vertices) = sector(48, r1, r2, phi);
-        let lp = mesh.validate().unwrap();
+        let lp = mesh.validate().unwrap().remove(0);
         let corners = corner_vertices.map(|c| lp.iter().position(|&b| b == c).unwrap());
         let side_loop: Vec<Vec<usize>> = (0..4)
             .map(|k| {

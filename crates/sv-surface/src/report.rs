@@ -21,13 +21,17 @@ pub struct SecondaryReport {
     pub vertices: usize,
     /// Mean edge length (mm).
     pub mean_edge: Real,
+    /// The requested unit size (mm) the face sides are measured against.
+    #[serde(default)]
+    pub unit_size: Real,
     /// Largest diagonal distance / face mean edge.
     pub planarity_max: Real,
     /// Face with the largest planarity residual.
     pub planarity_worst_face: usize,
-    /// Largest angle-balance residual `|w1 - w2 + w3 - w4|` (degrees) over interior
-    /// valence-4 vertices, `w_k` the face angles in cyclic order (the same figure as
-    /// `sv_frame::QuadMesh::conical_residuals`, which is in radians).
+    /// Largest conical residual (degrees) over interior vertices: the angle balance
+    /// `|w1 - w2 + w3 - w4|` at four faces, the largest angle between a face normal and
+    /// the best-fit cone of normals at five or more (valence 3 is always conical); the
+    /// same figure as `sv_frame::QuadMesh::conical_residuals`, which is in radians.
     pub conical_max_deg: Real,
     /// Vertex with the largest conical residual.
     pub conical_worst_vertex: usize,
@@ -52,6 +56,15 @@ pub struct SecondaryReport {
     pub rhombus_fit_max: Real,
     /// Face with the largest rhombus-fit residual.
     pub rhombus_fit_worst_face: usize,
+    /// Shortest face side / the requested unit size.
+    #[serde(default)]
+    pub side_min: Real,
+    /// Longest face side / the requested unit size.
+    #[serde(default)]
+    pub side_max: Real,
+    /// Interior vertices with other than four faces (valence 3, 5, ...), in index order.
+    #[serde(default)]
+    pub irregular_vertices: Vec<usize>,
     /// Faces that are not strictly convex (an angle at or above 180 degrees).
     pub non_convex_faces: Vec<usize>,
     /// Gauss-Newton iterations run.
@@ -75,6 +88,8 @@ pub struct Goals {
     pub coverage: Real,
     /// Fraction of faces with edge ratio <= 1.25.
     pub edge_ratio_fraction: Real,
+    /// Every face side within this range of the requested unit size.
+    pub side_range: (Real, Real),
 }
 
 impl Default for Goals {
@@ -87,25 +102,20 @@ impl Default for Goals {
             boundary: 0.05,
             coverage: 0.85,
             edge_ratio_fraction: 0.95,
+            side_range: (0.7, 1.4),
         }
     }
 }
 
-/// Angle-balance residual (radians) at each star of the mesh.
-pub(crate) fn conical_residuals(mesh: &QuadMesh, topo: &Topology) -> Vec<Real> {
-    topo.stars
-        .iter()
-        .map(|s| {
-            let v = mesh.vertices[s.vertex];
-            let w = s.faces.map(|(f, k)| {
-                let face = mesh.faces[f];
-                let a = mesh.vertices[face[(k + 1) % 4]] - v;
-                let b = mesh.vertices[face[(k + 3) % 4]] - v;
-                a.angle(&b)
-            });
-            (w[0] - w[1] + w[2] - w[3]).abs()
-        })
-        .collect()
+/// The quality figures and unmet goals of `mesh` as a hub mesh on the target of `index`
+/// for the requested `unit_size` (mm), the figures [`crate::build_secondary`] reports.
+pub fn measure_hub_mesh(
+    index: &TargetIndex<'_>,
+    mesh: &QuadMesh,
+    unit_size: Real,
+) -> Result<SecondaryReport, crate::SurfaceError> {
+    let topo = Topology::new(mesh)?;
+    Ok(measure(mesh, &topo, index, 0, unit_size, &Goals::default()))
 }
 
 pub(crate) fn measure(
@@ -113,6 +123,7 @@ pub(crate) fn measure(
     topo: &Topology,
     index: &TargetIndex<'_>,
     iterations: usize,
+    unit_size: Real,
     goals: &Goals,
 ) -> SecondaryReport {
     let mean = mesh.mean_edge().max(1e-300);
@@ -120,6 +131,7 @@ pub(crate) fn measure(
         faces: mesh.faces.len(),
         vertices: mesh.vertices.len(),
         mean_edge: mean,
+        unit_size,
         planarity_max: 0.0,
         planarity_worst_face: 0,
         conical_max_deg: 0.0,
@@ -133,14 +145,33 @@ pub(crate) fn measure(
         edge_ratio_max: 0.0,
         rhombus_fit_max: 0.0,
         rhombus_fit_worst_face: 0,
+        side_min: Real::INFINITY,
+        side_max: 0.0,
+        irregular_vertices: topo
+            .stars
+            .iter()
+            .filter(|s| s.faces.len() != 4)
+            .map(|s| s.vertex)
+            .collect(),
         non_convex_faces: Vec::new(),
         iterations,
         unmet: Vec::new(),
     };
     let mut good = 0usize;
+    let (mut side_min_face, mut side_max_face) = (0, 0);
     for (f, face) in mesh.faces.iter().enumerate() {
         let p = mesh.face_points(f);
         let e = [0, 1, 2, 3].map(|k| (p[(k + 1) % 4] - p[k]).norm());
+        for &len in &e {
+            if len / unit_size < r.side_min {
+                r.side_min = len / unit_size;
+                side_min_face = f;
+            }
+            if len / unit_size > r.side_max {
+                r.side_max = len / unit_size;
+                side_max_face = f;
+            }
+        }
         let fm = e.iter().sum::<Real>() / 4.0;
         let plan = quad_diagonal_distance(&p) / fm.max(1e-300);
         if plan > r.planarity_max {
@@ -174,11 +205,11 @@ pub(crate) fn measure(
         let _ = face;
     }
     r.edge_ratio_fraction = good as Real / mesh.faces.len().max(1) as Real;
-    for (s, c) in topo.stars.iter().zip(conical_residuals(mesh, topo)) {
+    for (v, c) in mesh.conical_residuals() {
         let deg = c.to_degrees();
         if deg > r.conical_max_deg {
             r.conical_max_deg = deg;
-            r.conical_worst_vertex = s.vertex;
+            r.conical_worst_vertex = v;
         }
     }
     for (v, p) in mesh.vertices.iter().enumerate() {
@@ -198,10 +229,15 @@ pub(crate) fn measure(
     let (cov, uncovered) = coverage(mesh, index.mesh, mean);
     r.coverage = cov;
     let g = goals;
+    let pct = |x: Real| 100.0 * x;
     if r.planarity_max > g.planarity {
         r.unmet.push(format!(
-            "planarity {:.5} > {} at face {}",
-            r.planarity_max, g.planarity, r.planarity_worst_face
+            "planarity {:.5} > {} at face {} (diagonal distance {:.1} mm, {:.2} % of the side)",
+            r.planarity_max,
+            g.planarity,
+            r.planarity_worst_face,
+            r.planarity_max * mean,
+            pct(r.planarity_max)
         ));
     }
     if r.conical_max_deg > g.conical_deg {
@@ -212,14 +248,20 @@ pub(crate) fn measure(
     }
     if r.closeness_max > g.closeness {
         r.unmet.push(format!(
-            "distance to target {:.4} of the unit side > {} at vertex {}",
-            r.closeness_max, g.closeness, r.closeness_worst_vertex
+            "distance to target {:.1} mm ({:.1} % of the side) > {} % at vertex {}",
+            r.closeness_max * mean,
+            pct(r.closeness_max),
+            pct(g.closeness),
+            r.closeness_worst_vertex
         ));
     }
     if r.boundary_max > g.boundary {
         r.unmet.push(format!(
-            "distance to boundary {:.4} of the unit side > {} at vertex {}",
-            r.boundary_max, g.boundary, r.boundary_worst_vertex
+            "distance to boundary {:.1} mm ({:.1} % of the side) > {} % at vertex {}",
+            r.boundary_max * mean,
+            pct(r.boundary_max),
+            pct(g.boundary),
+            r.boundary_worst_vertex
         ));
     }
     if r.coverage < g.coverage {
@@ -245,6 +287,20 @@ pub(crate) fn measure(
         r.unmet.push(format!(
             "faces with edge ratio <= {EDGE_RATIO_LIMIT}: {:.3} < {} (max ratio {:.2})",
             r.edge_ratio_fraction, g.edge_ratio_fraction, r.edge_ratio_max
+        ));
+    }
+    let (lo, hi) = g.side_range;
+    if r.side_min < lo || r.side_max > hi {
+        let (side, f) = if r.side_min < lo {
+            (r.side_min, side_min_face)
+        } else {
+            (r.side_max, side_max_face)
+        };
+        r.unmet.push(format!(
+            "face sides {:.2}..{:.2} of the unit size, outside {lo}..{hi}, worst {:.0} mm at face {f}",
+            r.side_min,
+            r.side_max,
+            side * unit_size
         ));
     }
     if let Some(&f) = r.non_convex_faces.first() {

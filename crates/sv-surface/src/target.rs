@@ -11,8 +11,8 @@ use crate::SurfaceError;
 /// A triangle mesh in mm, Z up: the design surface the hub mesh must follow.
 ///
 /// Same shape as `sv_io::TriMesh` (the CLI converts field by field). A usable target is one
-/// connected, manifold, consistently oriented patch with exactly one boundary loop (a disc);
-/// see [`TargetMesh::validate`].
+/// connected, manifold, consistently oriented patch without handles, with one or more
+/// boundary loops (a disc, or a disc with holes); see [`TargetMesh::validate`].
 #[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
 pub struct TargetMesh {
     /// Vertex positions (mm).
@@ -53,10 +53,11 @@ impl TargetMesh {
     }
 
     /// Check that the mesh is a usable target: non-empty, finite, indices in range, no
-    /// degenerate triangles, manifold, consistently oriented, one connected component and
-    /// exactly one boundary loop (disc-like, not closed). Returns the boundary loop as
-    /// ordered vertex indices.
-    pub fn validate(&self) -> Result<Vec<usize>, SurfaceError> {
+    /// degenerate triangles, manifold, consistently oriented, one connected component, at
+    /// least one boundary loop (not closed) and no handles (a disc with any number of
+    /// holes). Returns the boundary loops as ordered vertex indices (each with the surface
+    /// on its left), the longest first (the outer boundary of a roof with courtyards).
+    pub fn validate(&self) -> Result<Vec<Vec<usize>>, SurfaceError> {
         let bad = |s: String| Err(SurfaceError::InvalidTarget(s));
         if self.triangles.is_empty() || self.vertices.is_empty() {
             return bad("the mesh has no triangles".into());
@@ -140,37 +141,45 @@ impl TargetMesh {
                     .into(),
             );
         }
-        let start = boundary_edges[0].0;
-        let mut lp = vec![start];
-        let mut v = next[&start];
-        while v != start {
-            lp.push(v);
-            v = match next.get(&v) {
-                Some(&w) => w,
-                None => return bad(format!("boundary is open at vertex {v}")),
-            };
-            if lp.len() > boundary_edges.len() {
-                return Err(SurfaceError::Internal("boundary walk did not close".into()));
+        let mut loops: Vec<Vec<usize>> = Vec::new();
+        let mut seen = std::collections::HashSet::new();
+        for &(start, _) in &boundary_edges {
+            if !seen.insert(start) {
+                continue;
             }
+            let mut lp = vec![start];
+            let mut v = next[&start];
+            while v != start {
+                if !seen.insert(v) {
+                    return Err(SurfaceError::Internal("boundary walk did not close".into()));
+                }
+                lp.push(v);
+                v = match next.get(&v) {
+                    Some(&w) => w,
+                    None => return bad(format!("boundary is open at vertex {v}")),
+                };
+            }
+            loops.push(lp);
         }
-        if lp.len() != boundary_edges.len() {
-            return bad(format!(
-                "the surface has more than one boundary loop (holes); the loop through vertex {start} has {} of {} boundary edges",
-                lp.len(),
-                boundary_edges.len()
-            ));
-        }
-        // Euler characteristic of a disc is 1 (rules out handles)
+        let length = |lp: &Vec<usize>| -> Real {
+            (0..lp.len())
+                .map(|k| (self.vertices[lp[(k + 1) % lp.len()]] - self.vertices[lp[k]]).norm())
+                .sum()
+        };
+        loops.sort_by(|a, b| length(b).total_cmp(&length(a)));
+        // Euler characteristic of a disc with h holes is 1 - h (rules out handles)
         let used: std::collections::HashSet<usize> =
             self.triangles.iter().flatten().copied().collect();
         let edges = directed.len() - (directed.len() - boundary_edges.len()) / 2;
         let chi = used.len() as i64 - edges as i64 + self.triangles.len() as i64;
-        if chi != 1 {
+        let expected = 2 - loops.len() as i64;
+        if chi != expected {
             return bad(format!(
-                "the surface is not a disc (Euler characteristic {chi}, expected 1)"
+                "the surface has handles (Euler characteristic {chi} with {} boundary loop(s), expected {expected}); a target must be a disc, possibly with holes",
+                loops.len()
             ));
         }
-        Ok(lp)
+        Ok(loops)
     }
 }
 
@@ -238,10 +247,15 @@ pub(crate) fn closest_on_triangle(
     (a + ab * v + ac * w, [1.0 - v - w, v, w])
 }
 
-/// A validated target with acceleration structures for closest-point queries.
-pub(crate) struct TargetIndex<'a> {
+/// A validated target with acceleration structures for closest-point queries (to the
+/// surface and to its boundary loops), for the optimiser, the report and any later stage
+/// that moves hub vertices on the target.
+pub struct TargetIndex<'a> {
     pub(crate) mesh: &'a TargetMesh,
+    /// The outer (longest) boundary loop.
     pub(crate) boundary: Vec<usize>,
+    /// Every boundary loop, the outer one first.
+    pub(crate) loops: Vec<Vec<usize>>,
     /// cumulative arc length at boundary vertex k (k = 0..=len, last = perimeter)
     pub(crate) boundary_arc: Vec<Real>,
     vertex_normals: Vec<Vector3>,
@@ -252,8 +266,10 @@ pub(crate) struct TargetIndex<'a> {
 }
 
 impl<'a> TargetIndex<'a> {
-    pub(crate) fn new(mesh: &'a TargetMesh) -> Result<Self, SurfaceError> {
-        let boundary = mesh.validate()?;
+    /// Validate `mesh` ([`TargetMesh::validate`]) and index it.
+    pub fn new(mesh: &'a TargetMesh) -> Result<Self, SurfaceError> {
+        let loops = mesh.validate()?;
+        let boundary = loops[0].clone();
         let v = &mesh.vertices;
         let mut vertex_normals = vec![Vector3::zeros(); v.len()];
         let mut edge_sum = 0.0;
@@ -307,6 +323,7 @@ impl<'a> TargetIndex<'a> {
         Ok(Self {
             mesh,
             boundary,
+            loops,
             boundary_arc,
             vertex_normals,
             lo,
@@ -316,20 +333,20 @@ impl<'a> TargetIndex<'a> {
         })
     }
 
-    /// Perimeter of the boundary loop.
+    /// Perimeter of the outer boundary loop.
     pub(crate) fn perimeter(&self) -> Real {
         *self.boundary_arc.last().unwrap_or(&0.0)
     }
 
     /// Closest point on the mesh (expanding shell search over the uniform grid).
-    pub(crate) fn closest(&self, p: &Point3) -> ClosestPoint {
+    pub fn closest(&self, p: &Point3) -> ClosestPoint {
         self.closest_near(p, None)
     }
 
     /// Closest point on the mesh; `hint` is a triangle expected to be near (the answer
     /// for a nearby query): its distance bounds the search to the cells within that
     /// distance, which is exact and much cheaper than the shell search when it is small.
-    pub(crate) fn closest_near(&self, p: &Point3, hint: Option<usize>) -> ClosestPoint {
+    pub fn closest_near(&self, p: &Point3, hint: Option<usize>) -> ClosestPoint {
         let v = &self.mesh.vertices;
         let dims = self.dims;
         let mut best = (Real::INFINITY, *p, [0.0; 3], 0usize);
@@ -412,30 +429,32 @@ impl<'a> TargetIndex<'a> {
         }
     }
 
-    /// Closest point on the boundary polyline (brute force over its segments).
-    pub(crate) fn closest_on_boundary(&self, p: &Point3) -> BoundaryPoint {
+    /// Closest point on the boundary polylines (brute force over their segments); the
+    /// arc length is measured along the loop the point is on.
+    pub fn closest_on_boundary(&self, p: &Point3) -> BoundaryPoint {
         let v = &self.mesh.vertices;
-        let m = self.boundary.len();
         let mut best = (Real::INFINITY, *p, Vector3::x(), 0.0);
-        for k in 0..m {
-            let a = v[self.boundary[k]];
-            let b = v[self.boundary[(k + 1) % m]];
-            let ab = b - a;
-            let len2 = ab.norm_squared();
-            let s = if len2 > 0.0 {
-                ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let q = a + ab * s;
-            let d = (q - p).norm_squared();
-            if d < best.0 {
-                let t = if len2 > 0.0 {
-                    ab / len2.sqrt()
+        for lp in &self.loops {
+            let m = lp.len();
+            let mut arc = 0.0;
+            for k in 0..m {
+                let a = v[lp[k]];
+                let b = v[lp[(k + 1) % m]];
+                let ab = b - a;
+                let len2 = ab.norm_squared();
+                let len = len2.sqrt();
+                let s = if len2 > 0.0 {
+                    ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
                 } else {
-                    Vector3::x()
+                    0.0
                 };
-                best = (d, q, t, self.boundary_arc[k] + s * len2.sqrt());
+                let q = a + ab * s;
+                let d = (q - p).norm_squared();
+                if d < best.0 {
+                    let t = if len2 > 0.0 { ab / len } else { Vector3::x() };
+                    best = (d, q, t, arc + s * len);
+                }
+                arc += len;
             }
         }
         BoundaryPoint {
@@ -499,7 +518,8 @@ mod tests {
     fn square_is_valid_with_one_loop() {
         let m = square(4);
         let lp = m.validate().unwrap();
-        assert_eq!(lp.len(), 16);
+        assert_eq!(lp.len(), 1);
+        assert_eq!(lp[0].len(), 16);
         assert!((m.area() - 16.0).abs() < 1e-12);
     }
 
@@ -527,13 +547,16 @@ mod tests {
         ]);
         m.triangles.push([k, k + 1, k + 2]);
         assert!(err(&m).contains("not connected"), "{}", err(&m));
-        // hole: remove the two centre triangles of a 3x3 square
+        // a hole (the two centre triangles of a 3 x 3 square removed) is a second loop
         let mut m = square(3);
         m.triangles.drain(8..10);
+        let loops = m.validate().unwrap();
+        assert_eq!(loops.iter().map(Vec::len).collect::<Vec<_>>(), [12, 4]);
+        let idx = TargetIndex::new(&m).unwrap();
+        let b = idx.closest_on_boundary(&Point3::new(1.5, 1.4, 0.0));
         assert!(
-            err(&m).contains("more than one boundary loop"),
-            "{}",
-            err(&m)
+            (b.point - Point3::new(1.5, 1.0, 0.0)).norm() < 1e-12,
+            "{b:?}"
         );
         // closed: tetrahedron
         let m = TargetMesh {

@@ -1,4 +1,5 @@
-//! Connectivity of a quad mesh needed by the optimiser and the report.
+//! Connectivity of a quad mesh needed by the optimiser and the report: any valence, any
+//! number of boundary loops.
 
 use std::collections::HashMap;
 
@@ -6,20 +7,23 @@ use sv_frame::QuadMesh;
 
 use crate::SurfaceError;
 
-/// An interior valence-4 vertex with its faces in cyclic order.
+/// An interior vertex with its faces in cyclic order (any valence >= 3).
 #[derive(Clone, Debug)]
 pub(crate) struct Star {
     pub(crate) vertex: usize,
     /// `(face, corner)` pairs in cyclic order around the vertex.
-    pub(crate) faces: [(usize, usize); 4],
+    pub(crate) faces: Vec<(usize, usize)>,
 }
 
 pub(crate) struct Topology {
     pub(crate) boundary: Vec<bool>,
-    /// Boundary vertices with a single face (grid corners).
+    /// Boundary vertices with other than two faces: corners of the layout (one face at a
+    /// convex corner, three or more at a reflex one). They stay where they start.
     pub(crate) corner: Vec<bool>,
+    /// Interior vertices with a closed fan.
     pub(crate) stars: Vec<Star>,
-    /// Consecutive vertices `(a, b, c)` along a grid polyline through `b`.
+    /// Consecutive vertices `(a, b, c)` along a mesh polyline through a regular vertex `b`
+    /// (interior with four faces, or on the boundary with two).
     pub(crate) triples: Vec<[usize; 3]>,
 }
 
@@ -48,63 +52,50 @@ impl Topology {
             }
         }
         let mut boundary = vec![false; nv];
-        let mut corners: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nv];
-        for (f, face) in mesh.faces.iter().enumerate() {
+        let mut count = vec![0usize; nv];
+        let mut boundary_nb: Vec<Vec<usize>> = vec![Vec::new(); nv];
+        for face in &mesh.faces {
             for k in 0..4 {
-                corners[face[k]].push((f, k));
+                count[face[k]] += 1;
                 let (a, b) = (face[k], face[(k + 1) % 4]);
                 if !edge_face.contains_key(&(b, a)) {
                     boundary[a] = true;
                     boundary[b] = true;
+                    boundary_nb[a].push(b);
+                    boundary_nb[b].push(a);
                 }
             }
         }
-        let mut stars = Vec::new();
+        let stars: Vec<Star> = mesh
+            .interior_fans()
+            .into_iter()
+            .filter(|(v, _)| !boundary[*v])
+            .map(|(vertex, faces)| Star { vertex, faces })
+            .collect();
+        // in vertex order (the order of the optimiser's rows)
+        let mut star_at = vec![None; nv];
+        for (i, s) in stars.iter().enumerate() {
+            star_at[s.vertex] = Some(i);
+        }
         let mut triples = Vec::new();
         for v in 0..nv {
-            let cs = &corners[v];
-            if !boundary[v] && cs.len() == 4 {
-                let mut order = [cs[0]; 4];
-                let mut ok = true;
-                for s in 1..4 {
-                    let (f, k) = order[s - 1];
-                    let next = mesh.faces[f][(k + 1) % 4];
-                    match edge_face.get(&(next, v)) {
-                        Some(&(g, m)) => order[s] = (g, (m + 1) % 4),
-                        None => ok = false,
-                    }
-                }
-                if ok {
-                    stars.push(Star {
-                        vertex: v,
-                        faces: order,
-                    });
-                    // neighbours in cyclic order: next of each corner
-                    let nb = order.map(|(f, k)| mesh.faces[f][(k + 1) % 4]);
+            match star_at[v].map(|i| &stars[i]) {
+                Some(s) if s.faces.len() == 4 => {
+                    let nb: Vec<usize> = s
+                        .faces
+                        .iter()
+                        .map(|&(f, k)| mesh.faces[f][(k + 1) % 4])
+                        .collect();
                     triples.push([nb[0], v, nb[2]]);
                     triples.push([nb[1], v, nb[3]]);
                 }
-            } else if boundary[v] && cs.len() == 2 {
-                // the two boundary neighbours
-                let mut nb = Vec::new();
-                for &(f, k) in cs {
-                    let face = mesh.faces[f];
-                    let (next, prev) = (face[(k + 1) % 4], face[(k + 3) % 4]);
-                    if !edge_face.contains_key(&(next, v)) {
-                        nb.push(next);
-                    }
-                    if !edge_face.contains_key(&(v, prev)) {
-                        nb.push(prev);
-                    }
+                _ if boundary[v] && count[v] == 2 && boundary_nb[v].len() == 2 => {
+                    triples.push([boundary_nb[v][0], v, boundary_nb[v][1]]);
                 }
-                if nb.len() == 2 {
-                    triples.push([nb[0], v, nb[1]]);
-                }
+                _ => {}
             }
         }
-        let corner = (0..nv)
-            .map(|v| boundary[v] && corners[v].len() == 1)
-            .collect();
+        let corner = (0..nv).map(|v| boundary[v] && count[v] != 2).collect();
         Ok(Self {
             boundary,
             corner,
