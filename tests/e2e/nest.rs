@@ -38,8 +38,10 @@ fn dxf_parts_nest_inside_the_sheet_and_open_contours_are_left_out() {
         "open.dxf",
         "--sheet",
         "1200x600",
+        "--nest-evaluations",
+        "100000",
         "--nest-seconds",
-        "1",
+        "3600",
         "--out",
         "n",
     ]);

@@ -484,8 +484,10 @@ fn bad_parts_are_named_and_left_out_while_the_others_nest() {
         "open.dxf",
         "flat.dxf",
         "missing.dxf",
+        "--nest-evaluations",
+        "100000",
         "--nest-seconds",
-        "1",
+        "3600",
         "--out",
         "n",
     ]);
