@@ -6,6 +6,11 @@ mesh written here is the mesh the Rust constructors build (up to the last bit of
 
 usage: make_meshes.py cap NX NY RADIUS SPACING OUT.obj
        make_meshes.py saddle NX NY SPACING R OUT.obj      # z = x^2/(2R) - y^2/(2R)
+       make_meshes.py dome LX LY R1 R2 N OUT.obj          # a target (triangles), below
+
+`dome` writes a build target, not a hub mesh: the shallow dome z = -x^2/(2 R1) - y^2/(2 R2)
+over LX x LY mm in plan (principal radii R1 along x and R2 along y at the apex), as a
+triangle mesh of N x round(N LY / LX) grid cells, each split in two.
 """
 import math
 import sys
@@ -39,14 +44,31 @@ def saddle(nx, ny, spacing, r):
     return grid(nx, ny, pos)
 
 
+def dome(lx, ly, r1, r2, n):
+    ny = max(1, round(n * ly / lx))
+    verts = []
+    for j in range(ny + 1):
+        for i in range(n + 1):
+            x, y = i * lx / n - lx / 2, j * ly / ny - ly / 2
+            verts.append((x, y, -x * x / (2 * r1) - y * y / (2 * r2)))
+    vid = lambda i, j: j * (n + 1) + i
+    tris = []
+    for j in range(ny):
+        for i in range(n):
+            a, b, c, d = vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)
+            tris += [(a, b, c), (a, c, d)]
+    return verts, tris
+
+
 def write(path, about, mesh):
     verts, faces = mesh
     with open(path, "w") as f:
-        f.write(f"# {about}\n# quad mesh, units: mm, {len(verts)} vertices, {len(faces)} faces\n")
+        kind = "quad" if len(faces[0]) == 4 else "triangle"
+        f.write(f"# {about}\n# {kind} mesh, units: mm, {len(verts)} vertices, {len(faces)} faces\n")
         for v in verts:
             f.write("v %r %r %r\n" % v)
         for q in faces:
-            f.write("f %d %d %d %d\n" % tuple(k + 1 for k in q))
+            f.write("f " + " ".join(str(k + 1) for k in q) + "\n")
 
 
 def main(argv):
@@ -59,6 +81,11 @@ def main(argv):
         nx, ny, spacing, r, out = int(argv[2]), int(argv[3]), float(argv[4]), float(argv[5]), argv[6]
         write(out, f"saddle {nx} x {ny}, z = (x^2 - y^2)/(2 x {r}) mm, spacing {spacing} mm",
               saddle(nx, ny, spacing, r))
+    elif kind == "dome":
+        lx, ly, r1, r2, n, out = (float(argv[2]), float(argv[3]), float(argv[4]),
+                                  float(argv[5]), int(argv[6]), argv[7])
+        write(out, f"shallow dome {lx:g} x {ly:g} mm, principal radii {r1:g} and {r2:g} mm",
+              dome(lx, ly, r1, r2, n))
     else:
         sys.exit(__doc__)
 

@@ -18,13 +18,21 @@ const FILES: [&str; 11] = [
     "timings.json",
 ];
 
-/// `spinvalence build` with every default (the pavilion into `./out`), run once per test
-/// run in `target/tmp/e2e-default-build` and shared by the tests that read its output.
+/// The nest stage's options in [`default_build`]: a fixed work budget (about what the
+/// default 5 s give the pavilion) and a time cap no busy test machine reaches, so that the
+/// sheets are the same on every run however loaded the machine is.
+pub const NEST_WORK: [&str; 4] = ["--nest-evaluations", "800000", "--nest-seconds", "3600"];
+
+/// `spinvalence build` with every default but the nest stage's [`NEST_WORK`] (the pavilion
+/// into `./out`), run once per test run in `target/tmp/e2e-default-build` and shared by the
+/// tests that read its output.
 pub fn default_build() -> &'static (Dir, Output) {
     static BUILD: OnceLock<(Dir, Output)> = OnceLock::new();
     BUILD.get_or_init(|| {
         let dir = Dir::persistent("e2e-default-build");
-        let out = dir.run(&["build"]);
+        let mut args = vec!["build"];
+        args.extend(NEST_WORK);
+        let out = dir.run(&args);
         (dir, out)
     })
 }
@@ -46,6 +54,7 @@ fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
         "strips",
         "sheets",
         "offcut",
+        "search",
         "steel",
         "cut length / pierces",
         "welds",
@@ -339,7 +348,7 @@ fn nest_section_sets_the_sheets_and_bad_values_name_the_key() {
     let dir = Dir::new();
     dir.write(
         "n.toml",
-        "target = \"builtin:vault\"\n[secondary]\nunit_size = 500.0\n[nest]\nsheets = [\"2000x1000\", \"3200x1600\"]\nmargin = 15.0\nclearance = 2.0\nseconds = 600.0\nseed = 7\n",
+        "target = \"builtin:vault\"\n[secondary]\nunit_size = 500.0\n[nest]\nsheets = [\"2000x1000\", \"3200x1600\"]\nmargin = 15.0\nclearance = 2.0\nseconds = 600.0\nevaluations = 20000\nseed = 7\n",
     );
     let started = std::time::Instant::now();
     dir.run(&[
@@ -366,6 +375,8 @@ fn nest_section_sets_the_sheets_and_bad_values_name_the_key() {
     );
     let timings = read_json(&dir.join("o/timings.json"));
     assert!(num(&timings["nest"], "nest") < 60.0);
+    // the file's work budget decides the layout
+    assert_eq!(nest["search"]["work_budget"], 20_000, "{}", nest["search"]);
     let files = dir.entries("o/sheets");
     for (i, sheet) in nest["sheets"].as_array().unwrap().iter().enumerate() {
         let (w, h) = (num(&sheet["width"], "w"), num(&sheet["height"], "h"));

@@ -16,6 +16,7 @@ use std::process::Command;
 use serde_json::Value;
 use sv_geom::planar::{boundary_distance, polygon_area};
 
+use crate::build::NEST_WORK;
 use crate::ezdxf::{audit_foreign_sheets, venv_python};
 use crate::sheets::{parts_of, SheetPart};
 use crate::util::{dxf_entities, num, read_json, Dir};
@@ -212,8 +213,10 @@ fn foreign_dxf_parts_nest_as_drawn_or_are_refused_in_one_line() {
         .iter()
         .filter(|c| !c["alone"].as_bool().unwrap())
         .collect();
-    let mut args: Vec<String> = ["nest", "--nest-seconds", "2", "--out", "n"]
+    // a fixed work budget: the clock never cuts the search (its warning would be on stderr)
+    let mut args: Vec<String> = ["nest", "--out", "n"]
         .iter()
+        .chain(&NEST_WORK)
         .map(|s| s.to_string())
         .collect();
     args.extend(

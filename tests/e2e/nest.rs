@@ -38,8 +38,10 @@ fn dxf_parts_nest_inside_the_sheet_and_open_contours_are_left_out() {
         "open.dxf",
         "--sheet",
         "1200x600",
+        "--nest-evaluations",
+        "100000",
         "--nest-seconds",
-        "1",
+        "3600",
         "--out",
         "n",
     ]);
@@ -117,7 +119,17 @@ fn strip_instance_reaches_a_real_density() {
         env!("CARGO_MANIFEST_DIR"),
         "/../../../shared/datasets/nesting/spp/fu.json"
     );
-    let out = dir.run(&["nest", fu, "--nest-seconds", "2", "--out", "fu", "--quiet"]);
+    let out = dir.run(&[
+        "nest",
+        fu,
+        "--nest-evaluations",
+        "150000",
+        "--nest-seconds",
+        "600",
+        "--out",
+        "fu",
+        "--quiet",
+    ]);
     out.expect_code(0);
     let r = read_json(&dir.join("fu/strip.json"));
     let density = num(&r["density"], "density");

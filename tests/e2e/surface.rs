@@ -23,8 +23,10 @@ fn unmet_goals_still_build_everything_and_exit_3() {
         &target,
         "--out",
         "o",
+        "--nest-evaluations",
+        "100000",
         "--nest-seconds",
-        "1",
+        "3600",
     ]);
     out.expect_code(3);
     for f in [
@@ -79,8 +81,10 @@ fn unmet_goals_still_build_everything_and_exit_3() {
         &target,
         "--out",
         "s",
+        "--nest-evaluations",
+        "100000",
         "--nest-seconds",
-        "1",
+        "3600",
         "--quiet",
         "--strict",
     ]);
@@ -227,8 +231,10 @@ fn an_obj_triangle_soup_with_mixed_orientation_builds() {
         "soup.obj",
         "--out",
         "o",
+        "--nest-evaluations",
+        "100000",
         "--nest-seconds",
-        "1",
+        "3600",
     ]);
     out.expect_code(0);
     assert!(

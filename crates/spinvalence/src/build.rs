@@ -89,6 +89,9 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
     if let Some(s) = args.nest_seconds {
         cfg.nest.seconds = s;
     }
+    if let Some(n) = args.nest_evaluations {
+        cfg.nest.evaluations = Some(n);
+    }
     let size = cfg.secondary.unit_size;
     if !(size.is_finite() && size > 0.0) {
         bail!("invalid unit size {size}: must be a positive length in mm");
@@ -273,6 +276,9 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     if let Some(l) = nested.report.left_out.first() {
         bail!("nesting: strip {} was left out: {}", l.part, l.reason);
     }
+    if let Some(w) = sheets::cut_warning(&nested.report, cfg.nest.seconds) {
+        eprintln!("{w}");
+    }
     for (name, text) in &nested.drawings {
         sheets_dir.write(name, text)?;
     }
@@ -334,7 +340,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
                 stage.worst_pin.1.to_degrees()
             ),
         ]];
-        stage_rows.extend(sheets::summary_rows(&nested.report));
+        stage_rows.extend(sheets::summary_rows(&nested.report, cfg.nest.seconds));
         let report_path = cfg.out.join("report.html").display().to_string();
         stage_rows.extend(report::summary_rows(&report_stage, &report_path));
         let at = rows.len() - 2;

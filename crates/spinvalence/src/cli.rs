@@ -113,8 +113,11 @@ and before their outline; pierce points and labels on INFO) and .svg (or DIR/str
 an instance).
 Parts that cannot be nested (open or self-intersecting contours, larger than every sheet,
 unreadable files) are left out, each named on one `warning:` line on stderr and in
-nest.json's left_out; the others still nest (exit code 0). Same seed, same layout
-for the same budget.";
+nest.json's left_out; the others still nest (exit code 0). The layout is decided by a
+work budget (collision evaluations: --nest-evaluations, else derived from --nest-seconds
+and the parts), so the same files, options and seed give the same sheets on every machine;
+--nest-seconds caps the wall time of the whole stage, and when it cuts the search short the
+summary, a warning line and nest.json's search.cut_by_time say so.";
 
 /// `spinvalence nest`.
 #[derive(Debug, Args)]
@@ -147,7 +150,8 @@ pub struct NestArgs {
     /// Allow any rotation (default: 0 and 180 degrees).
     #[arg(long)]
     pub free_rotation: bool,
-    /// Time budget in seconds (the best layout so far is kept).
+    /// Time budget in seconds: caps the whole stage and, without --nest-evaluations, sets
+    /// the work budget that decides the layout.
     #[arg(
         long,
         value_name = "S",
@@ -155,6 +159,10 @@ pub struct NestArgs {
         allow_negative_numbers = true
     )]
     pub nest_seconds: f64,
+    /// Work budget (collision evaluations) that decides the layout, the same on every
+    /// machine; --nest-seconds then only caps the time.
+    #[arg(long, value_name = "N")]
+    pub nest_evaluations: Option<u64>,
     /// Random seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -223,9 +231,14 @@ pub struct BuildArgs {
     /// Mesh direction of the strips: u (along side 0 of unit 0) or v (default u).
     #[arg(long, value_name = "u|v", value_parser = parse_direction)]
     pub strip_direction: Option<sv_strips::StripDirection>,
-    /// Time budget of the nesting in seconds (default 5; the best layout so far is kept).
+    /// Time budget of the nesting in seconds (default 5): caps the stage and, without
+    /// --nest-evaluations, sets the work budget that decides the sheets.
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub nest_seconds: Option<f64>,
+    /// Work budget of the nesting (collision evaluations), the same sheets on every
+    /// machine; --nest-seconds then only caps the time.
+    #[arg(long, value_name = "N")]
+    pub nest_evaluations: Option<u64>,
     /// Print a config file with every default and exit.
     #[arg(long)]
     pub print_config: bool,

@@ -96,9 +96,14 @@ pub struct NestConfig {
     pub clearance: f64,
     /// Any rotation instead of 0 and 180 degrees.
     pub free_rotation: bool,
-    /// Time budget of the nesting (s); the best layout so far is kept.
+    /// Time budget of the nesting (s): caps the stage and, without `evaluations`, sets the
+    /// work budget that decides the sheets.
     pub seconds: f64,
-    /// Random seed (same seed and budget, same layout on the same machine).
+    /// Work budget of the nesting (collision evaluations): the same sheets on every
+    /// machine, `seconds` only caps the time. Default: derived from `seconds` and the parts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub evaluations: Option<u64>,
+    /// Random seed (same seed and work budget, same sheets on every machine).
     pub seed: u64,
 }
 
@@ -118,6 +123,7 @@ impl Default for NestConfig {
             clearance: 4.7,
             free_rotation: false,
             seconds: DEFAULT_NEST_SECONDS,
+            evaluations: None,
             seed: 0,
         }
     }
@@ -149,6 +155,7 @@ impl NestConfig {
             rotations: sv_nest::RotationMode::free_or_default(self.free_rotation),
             seed: self.seed,
             time_limit: std::time::Duration::from_secs_f64(self.seconds),
+            max_evaluations: self.evaluations,
             ..sv_nest::NestOptions::default()
         })
     }

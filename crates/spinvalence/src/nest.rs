@@ -202,6 +202,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
         rotations: RotationMode::free_or_default(args.free_rotation),
         seed: args.seed,
         time_limit: Duration::from_secs_f64(args.nest_seconds),
+        max_evaluations: args.nest_evaluations,
         ..NestOptions::default()
     };
     let started = Instant::now();
@@ -211,6 +212,9 @@ pub fn run(args: &NestArgs) -> Result<()> {
     // one line per part left out, even with --quiet: the others were nested without it
     for l in &report.left_out {
         eprintln!("warning: {} left out: {}", l.part, l.reason);
+    }
+    if let Some(w) = crate::sheets::cut_warning(report, args.nest_seconds) {
+        eprintln!("{w}");
     }
     for (name, text) in &stage.drawings {
         sheet_dir.write(name, text)?;
@@ -223,7 +227,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
     files.commit(&[&json])?;
     if !args.quiet {
         let mut rows: Vec<Vec<String>> = vec![vec!["parts".into(), parts.len().to_string()]];
-        rows.extend(crate::sheets::summary_rows(report));
+        rows.extend(crate::sheets::summary_rows(report, args.nest_seconds));
         for (i, s) in report.sheets.iter().enumerate() {
             rows.push(vec![
                 format!("sheet {}", i + 1),
@@ -248,18 +252,15 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
     let text = output::read_text(path)?;
     let inst = StripInstance::from_json(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
     let files = AtomicFiles::create(&args.out, &["strip.json"])?;
-    let bar = progress_bar(
-        args.quiet,
-        args.nest_seconds.ceil() as usize,
-        "strip packing",
-    );
+    let bar = progress_bar(args.quiet, 1000, "strip packing");
     let options = StripOptions {
         seed: args.seed,
         time_limit: Duration::from_secs_f64(args.nest_seconds),
+        max_evaluations: args.nest_evaluations,
         ..StripOptions::default()
     };
     let result = sv_nest::nest_strip(&inst, &options, &mut |p| {
-        bar.set_position(p.elapsed_s as u64);
+        bar.set_position((p.work_fraction * 1000.0) as u64);
         bar.set_message(format!(
             "length {}, density {:.2} %",
             number(p.best),
@@ -267,6 +268,13 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
         ));
     });
     bar.finish_and_clear();
+    if result.cut_by_time {
+        eprintln!(
+            "warning: strip packing: the {} s time cap cut the search short of its work \
+             budget; the layout may differ on a faster or less busy machine",
+            args.nest_seconds
+        );
+    }
     files.commit(&[&serde_json::to_string_pretty(&result)?])?;
     if !args.quiet {
         let rows = vec![
@@ -277,6 +285,15 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
             ],
             vec!["density".into(), format!("{:.2} %", 100.0 * result.density)],
             vec!["items".into(), result.placements.len().to_string()],
+            vec![
+                "search".into(),
+                crate::sheets::search_row(
+                    result.evaluations,
+                    result.work_budget.unwrap_or(result.evaluations) * options.threads as u64,
+                    result.cut_by_time,
+                    args.nest_seconds,
+                ),
+            ],
             vec!["time".into(), format!("{:.1} s", result.elapsed_s)],
         ];
         output::print_out(&output::table(&rows))?;

@@ -2,7 +2,10 @@
 //! nest the parts onto sheets with a progress bar, then draw every sheet as DXF (the shop
 //! file) and SVG (the preview). Pure computation; the callers write the files atomically.
 
+use std::time::Duration;
+
 use anyhow::{anyhow, Result};
+use rayon::prelude::*;
 use sv_export::{SheetCaption, SheetPart, ShopConvention};
 use sv_nest::{NestOptions, NestReport, Part};
 
@@ -19,8 +22,13 @@ pub struct NestStage {
     pub sheet_files: Vec<String>,
 }
 
+/// Wall seconds to draw one part on its sheet (DXF with pierce points, SVG) on the reference
+/// machine, both cores: measured on the 664 strips of the 20 x 12 m dome (docs/nesting.md).
+const DRAW_SECONDS_PER_PART: f64 = 3e-3;
+
 /// Nest `parts` with `options` and draw the sheets in `convention`; `thickness` (mm) goes
-/// into the file names and titles when known.
+/// into the file names and titles when known. `options.time_limit` bounds both (the nesting
+/// is given what the drawing is expected to leave).
 pub fn run(
     parts: &[SheetPart],
     options: &NestOptions,
@@ -29,10 +37,15 @@ pub fn run(
     quiet: bool,
 ) -> Result<NestStage> {
     let plain: Vec<Part> = parts.iter().map(|p| p.part.clone()).collect();
-    let seconds = options.time_limit.as_secs_f64();
-    let bar = progress_bar(quiet, (seconds * 10.0).ceil() as usize, "nesting");
-    let report = sv_nest::nest_sheets(&plain, options, &mut |p| {
-        bar.set_position((p.elapsed_s * 10.0) as u64);
+    // the time box holds the drawing too: the nesting gets what drawing these parts leaves
+    let drawing = Duration::from_secs_f64(DRAW_SECONDS_PER_PART * parts.len() as f64);
+    let nesting = NestOptions {
+        time_limit: options.time_limit.saturating_sub(drawing),
+        ..options.clone()
+    };
+    let bar = progress_bar(quiet, 1000, "nesting");
+    let report = sv_nest::nest_sheets(&plain, &nesting, &mut |p| {
+        bar.set_position((p.work_fraction * 1000.0) as u64);
         bar.set_message(format!(
             "{} sheet(s), {:.1} % used",
             p.best,
@@ -45,13 +58,22 @@ pub fn run(
         thickness,
         generator: format!("spinvalence {}", env!("CARGO_PKG_VERSION")),
     };
+    // every sheet drawn on its own core (in sheet order, whichever finishes first)
+    let drawn: Vec<Result<(String, String, String)>> = (0..report.sheets.len())
+        .into_par_iter()
+        .map(|i| {
+            let sheet = &report.sheets[i];
+            let stem = sv_export::sheet_file_stem(i, sheet.width, sheet.height, thickness);
+            let dxf = sv_export::sheet_dxf(&report, i, parts, &caption, convention)
+                .map_err(|e| anyhow!("nesting: {e}"))?;
+            let svg = sv_export::sheet_svg(&report, &plain, i);
+            Ok((stem, dxf, svg))
+        })
+        .collect();
     let mut drawings = Vec::with_capacity(2 * report.sheets.len());
     let mut sheet_files = Vec::with_capacity(report.sheets.len());
-    for (i, sheet) in report.sheets.iter().enumerate() {
-        let stem = sv_export::sheet_file_stem(i, sheet.width, sheet.height, thickness);
-        let dxf = sv_export::sheet_dxf(&report, i, parts, &caption, convention)
-            .map_err(|e| anyhow!("nesting: {e}"))?;
-        let svg = sv_export::sheet_svg(&report, &plain, i);
+    for d in drawn {
+        let (stem, dxf, svg) = d?;
         sheet_files.push(format!("sheets/{stem}.dxf"));
         drawings.push((format!("{stem}.dxf"), dxf));
         drawings.push((format!("{stem}.svg"), svg));
@@ -63,9 +85,44 @@ pub fn run(
     })
 }
 
-/// Rows of a summary table: sheets against the lower bound, utilisation, offcut and what
-/// was left out.
-pub fn summary_rows(report: &NestReport) -> Vec<Vec<String>> {
+/// The `search` row of a summary: the work done against the budget, and whether the time
+/// cap cut it (then the layout may differ from a run on a faster or less busy machine).
+pub fn search_row(evaluations: u64, budget: u64, cut: bool, seconds: f64) -> String {
+    let m = |n: u64| format!("{:.2} M", n as f64 / 1e6);
+    if cut {
+        format!(
+            "cut by the {seconds} s time cap at {:.0} % of its work budget ({} of {} evaluations): \
+             the layout may differ on a faster or less busy machine",
+            100.0 * (evaluations as f64 / budget.max(1) as f64).min(1.0),
+            m(evaluations),
+            m(budget)
+        )
+    } else {
+        format!(
+            "{} evaluations (work budget {}, the same layout on every machine)",
+            m(evaluations),
+            m(budget)
+        )
+    }
+}
+
+/// The warning line for a search the time cap cut short (printed even with `--quiet`).
+pub fn cut_warning(report: &NestReport, seconds: f64) -> Option<String> {
+    let s = &report.search;
+    s.cut_by_time.then(|| {
+        format!(
+            "warning: nesting: the {seconds} s time cap cut the search at {:.0} % of its work \
+             budget, so these sheets depend on this machine's speed; for the sheets a less \
+             busy machine finds, give --nest-evaluations {} and more --nest-seconds",
+            100.0 * s.done_fraction(),
+            s.work_budget
+        )
+    })
+}
+
+/// Rows of a summary table: sheets against the lower bound, utilisation, offcut, the search
+/// and what was left out.
+pub fn summary_rows(report: &NestReport, seconds: f64) -> Vec<Vec<String>> {
     let used: Vec<String> = report
         .sheets
         .iter()
@@ -93,6 +150,15 @@ pub fn summary_rows(report: &NestReport) -> Vec<Vec<String>> {
             ),
         ]);
     }
+    rows.push(vec![
+        "search".into(),
+        search_row(
+            report.search.evaluations,
+            report.search.work_budget,
+            report.search.cut_by_time,
+            seconds,
+        ),
+    ]);
     for l in &report.left_out {
         rows.push(vec!["left out".into(), format!("{}: {}", l.part, l.reason)]);
     }

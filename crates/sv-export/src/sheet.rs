@@ -8,7 +8,9 @@
 //! are on `INFO` too.
 
 use sv_dxf::{Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
-use sv_geom::planar::{bbox, boundary_distance, point_in_polygon, polygon_area};
+use sv_geom::planar::{
+    bbox, boundary_distance, point_in_polygon, point_segment_distance, polygon_area,
+};
 use sv_geom::Contour;
 use sv_nest::{NestReport, Part};
 use sv_strips::{FlatStrip, StripProfile};
@@ -163,7 +165,7 @@ impl Placed {
         {
             return false;
         }
-        if boundary_distance(p, &self.outer) < clear {
+        if clear > 0.0 && boundary_distance(p, &self.outer) < clear {
             return true;
         }
         point_in_polygon(p, &self.outer) && !self.holes.iter().any(|h| point_in_polygon(p, h))
@@ -171,24 +173,29 @@ impl Placed {
 }
 
 /// The point inside the closed polygon `poly` farthest from its boundary, and that
-/// distance. Candidates: every edge's midpoint moved inward by a series of distances (for a
-/// thin slot one of them lands on its centre line, which a grid would miss), then a local
-/// grid refinement around the best.
+/// distance. Candidates: from every edge's midpoint, halfway along the inward normal to the
+/// boundary across (for a thin slot that is its centre line, which a grid would miss),
+/// then a local grid refinement around the best. About `n²` work for `n` vertices.
 fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
     let (lo, hi) = bbox(poly);
     let reach = (hi[0] - lo[0]).min(hi[1] - lo[1]);
     let ccw = polygon_area(poly) > 0.0;
     let mut best = ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], -1.0);
+    let n = poly.len();
     let consider = |p: [f64; 2], best: &mut ([f64; 2], f64)| {
         if point_in_polygon(p, poly) {
-            let d = boundary_distance(p, poly);
-            if d > best.1 {
-                *best = (p, d);
+            // the distance to the boundary, given up as soon as it is no better
+            let mut d = f64::INFINITY;
+            for i in 0..n {
+                d = d.min(point_segment_distance(p, poly[i], poly[(i + 1) % n]));
+                if d <= best.1 {
+                    return;
+                }
             }
+            *best = (p, d);
         }
     };
     consider(best.0, &mut best);
-    let n = poly.len();
     for i in 0..n {
         let (a, b) = (poly[i], poly[(i + 1) % n]);
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -200,15 +207,33 @@ fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
         let s = if ccw { 1.0 } else { -1.0 };
         let nrm = [-s * dy / len, s * dx / len];
         let mid = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
-        let mut t = reach / 64.0;
-        while t <= reach {
+        // the nearest other edge along the normal
+        let mut across = f64::INFINITY;
+        for j in 0..n {
+            if j == i {
+                continue;
+            }
+            let (c, d) = (poly[j], poly[(j + 1) % n]);
+            let (ex, ey) = (d[0] - c[0], d[1] - c[1]);
+            let den = nrm[0] * ey - nrm[1] * ex;
+            if den.abs() < 1e-12 {
+                continue;
+            }
+            let (wx, wy) = (c[0] - mid[0], c[1] - mid[1]);
+            let t = (wx * ey - wy * ex) / den;
+            let u = (wx * nrm[1] - wy * nrm[0]) / den;
+            if t > 1e-9 && (0.0..=1.0).contains(&u) {
+                across = across.min(t);
+            }
+        }
+        if across.is_finite() {
+            let t = across / 2.0;
             consider([mid[0] + t * nrm[0], mid[1] + t * nrm[1]], &mut best);
-            t *= 1.25;
         }
     }
     // refine: shrinking grids around the best point
     let mut half = (best.1.max(reach / 64.0)).max(1e-3);
-    const N: usize = 8;
+    const N: usize = 6;
     for _ in 0..4 {
         let c = best.0;
         for i in 0..=N {

@@ -1,5 +1,8 @@
 //! Strip-packing benchmark runner:
-//! `cargo run --release -p sv-nest --example spp -- FILE --seconds 60 --seed 0 [--evals N]`.
+//! `cargo run --release -p sv-nest --example spp -- FILE --seconds 60 --seed 0 [--evals N]
+//! [--threads T]`. With `--seconds` alone the clock decides (a benchmark at equal time, as
+//! sparrow runs); with `--evals` the work budget of each search does (the same layout on
+//! every machine) and the seconds only cap it.
 #![allow(clippy::print_stdout)]
 
 use std::time::Duration;
@@ -10,6 +13,7 @@ fn main() {
     let mut secs = 10.0;
     let mut seed = 0;
     let mut evals = None;
+    let mut threads = sv_nest::strip::DEFAULT_SEARCHES;
     let mut i = 0;
     while i < args.len() {
         match args[i].as_str() {
@@ -19,6 +23,10 @@ fn main() {
             }
             "--evals" => {
                 evals = Some(args[i + 1].parse().expect("evals"));
+                i += 1;
+            }
+            "--threads" => {
+                threads = args[i + 1].parse().expect("threads");
                 i += 1;
             }
             "--seed" => {
@@ -35,8 +43,19 @@ fn main() {
         seed,
         time_limit: Duration::from_secs_f64(secs),
         max_evaluations: evals,
+        clock_decides: evals.is_none(),
+        threads,
         ..Default::default()
     };
+    let (n, v) = inst.items.iter().fold((0, 0), |(n, v), (it, q)| {
+        (n + q, v + q * it.shape_cd().vertices().len())
+    });
+    eprintln!(
+        "{}: {n} items, {:.1} collision vertices per item, work budget per search for {secs} s: {}",
+        inst.name,
+        v as f64 / n.max(1) as f64,
+        evals.unwrap_or_else(|| sv_nest::strip_work_budget(&inst, opts.time_limit))
+    );
     let mut first = None;
     let res = sv_nest::nest_strip(&inst, &opts, &mut |p| {
         if first.is_none() {
@@ -51,12 +70,13 @@ fn main() {
         );
     });
     println!(
-        "{} length {:.3} density {:.2} construct {:.2} evals {} time {:.1}",
+        "{} length {:.3} density {:.2} construct {:.2} evals {} time {:.1} cut {}",
         res.name,
         res.length,
         100.0 * res.density,
         100.0 * first.unwrap_or(0.0),
         res.evaluations,
-        res.elapsed_s
+        res.elapsed_s,
+        res.cut_by_time
     );
 }

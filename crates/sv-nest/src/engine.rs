@@ -33,38 +33,68 @@ pub(crate) const CDE_CONFIG: CDEConfig = CDEConfig {
     },
 };
 
-/// Stop criterion shared by all phases: wall time and number of collision queries.
+/// Share of the time budget (what the set-up leaves of it) that the derived work budgets
+/// fill on the reference machine (2 cores, nothing else running): the rest is headroom, so
+/// that a machine twice as slow or twice as busy still finishes the same work, and so gives
+/// the same layout, within the cap.
+pub(crate) const WORK_SHARE_OF_TIME: f64 = 0.4;
+
+/// Stop criterion shared by all phases of one search: a work budget (collision evaluations)
+/// decides how far the search goes, so that its result is a function of the input, the
+/// options and the seed; the wall clock only caps it. Without a work budget the clock
+/// decides (for benchmarks at equal time: not reproducible).
 pub(crate) struct Budget {
     start: Instant,
     limit: Duration,
-    max_evals: u64,
+    work: Option<u64>,
     pub evals: u64,
+    /// set when the clock, not the work budget, stopped the search
+    cut: std::cell::Cell<bool>,
 }
 
 impl Budget {
-    pub fn new(limit: Duration, max_evals: Option<u64>) -> Self {
+    /// A budget whose clock started at `start` (the stage's clock: set-up included).
+    pub fn new(start: Instant, limit: Duration, work: Option<u64>) -> Self {
         Self {
-            start: Instant::now(),
+            start,
             limit,
-            max_evals: max_evals.unwrap_or(u64::MAX),
+            work,
             evals: 0,
+            cut: std::cell::Cell::new(false),
         }
     }
+    /// Whether the search must stop: its work is done, or the clock ran out (remembered as
+    /// a cut when work was left).
     pub fn done(&self) -> bool {
-        self.evals >= self.max_evals || self.start.elapsed() >= self.limit
+        if self.work.is_some_and(|w| self.evals >= w) {
+            return true;
+        }
+        if self.start.elapsed() >= self.limit {
+            self.cut.set(self.work.is_some());
+            return true;
+        }
+        false
     }
     pub fn elapsed(&self) -> Duration {
         self.start.elapsed()
     }
-    /// Share of the budget used, 0..1 (wall time or evaluations, whichever is further).
+    /// Share of the budget used, 0..1: of the work budget when there is one (never of the
+    /// clock, which would make the phases depend on the machine), else of the time.
     pub fn fraction(&self) -> f32 {
-        let t = self.start.elapsed().as_secs_f32() / self.limit.as_secs_f32().max(1e-9);
-        let e = if self.max_evals == u64::MAX {
-            0.0
-        } else {
-            self.evals as f32 / self.max_evals.max(1) as f32
-        };
-        t.max(e).min(1.0)
+        match self.work {
+            Some(w) => (self.evals as f64 / w.max(1) as f64).min(1.0) as f32,
+            None => {
+                (self.start.elapsed().as_secs_f32() / self.limit.as_secs_f32().max(1e-9)).min(1.0)
+            }
+        }
+    }
+    /// The work budget, if the work decides.
+    pub fn work(&self) -> Option<u64> {
+        self.work
+    }
+    /// Whether the clock cut the search short of its work budget.
+    pub fn was_cut(&self) -> bool {
+        self.cut.get()
     }
 }
 
@@ -476,6 +506,16 @@ impl Bin {
         });
     }
 
+    /// Adds `item` at a random allowed rotation and a random place inside the bounds,
+    /// overlaps and all (for a separation to resolve).
+    pub fn add_anywhere(&mut self, inst: usize, item: &Arc<Item>, rng: &mut Rng64) {
+        let rot = sample_rotation(item, rng);
+        let rb = rotated_bbox(item.shape_cd(), rot);
+        let dt = sample_in(rb, rot, self.bounds, rng)
+            .unwrap_or_else(|| clamp_in(rb, rot, (0.0, 0.0), self.bounds));
+        self.add(inst, item, dt);
+    }
+
     pub fn remove(&mut self, i: usize) -> Member {
         self.layout.remove_item(self.members[i].pk);
         let m = self.members.swap_remove(i);
@@ -509,7 +549,8 @@ impl Bin {
     }
 
     /// Bottom-left-fill insertion: `n_samples` random feasible positions scored by x then y,
-    /// refined by a shrinking-step descent. Samples are drawn left of `x_limit`.
+    /// refined by a shrinking-step descent. Samples are drawn left of `x_limit`, then (when
+    /// none was feasible) half as many anywhere.
     /// Returns the transformation, or `None` if no feasible position was found.
     pub fn blf_position(
         &self,
@@ -535,8 +576,9 @@ impl Bin {
         };
         let mut boxes = RotBoxes::new(item.shape_cd());
         let mut area_try = area;
+        let mut samples = n_samples;
         for attempt in 0..2 {
-            for _ in 0..n_samples {
+            for _ in 0..samples {
                 let rot = sample_rotation(item, rng);
                 let rb = boxes.get(rot);
                 let Some(dt) = sample_in(rb, rot, area_try, rng) else {
@@ -550,10 +592,12 @@ impl Bin {
                     best = Some((sc, dt));
                 }
             }
-            if best.is_some() || attempt == 1 {
+            if best.is_some() || attempt == 1 || area_try == self.bounds {
                 break;
             }
+            // then anywhere, with fewer samples: the front is where a place usually is
             area_try = self.bounds;
+            samples = n_samples / 2;
         }
         let (mut best_sc, mut best_dt) = best?;
         // refinement: slide left / down with shrinking steps, at the sampled rotation
@@ -1051,7 +1095,7 @@ mod tests {
         }
         assert!(!bin.is_feasible());
         let mut rng = Rng64::seed_from_u64(1);
-        let mut budget = Budget::new(Duration::from_secs(60), Some(2_000_000));
+        let mut budget = Budget::new(Instant::now(), Duration::from_secs(60), Some(2_000_000));
         let loss = bin.separate_loss(&mut rng, &mut budget, 3, 200);
         assert_eq!(loss, 0.0);
         assert!(bin.is_feasible(), "the engine still sees a collision");

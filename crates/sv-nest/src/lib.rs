@@ -11,15 +11,20 @@
 
 mod engine;
 pub mod part;
+mod prepare;
+mod shape;
 pub mod sheets;
 pub mod strip;
 
 pub use part::{Contour, Part, Vertex, DEFAULT_FLATTEN_TOLERANCE};
 pub use sheets::{
     lower_bounds, nest_sheets, LowerBounds, NestOptions, NestReport, Offcut, PartPlacement,
-    RotationMode, SheetReport, SheetSpec, StockSheet,
+    RotationMode, SearchReport, SheetReport, SheetSpec, StockSheet,
 };
-pub use strip::{nest_strip, Progress, StripInstance, StripOptions, StripPlacement, StripResult};
+pub use strip::{
+    nest_strip, strip_work_budget, Progress, StripInstance, StripOptions, StripPlacement,
+    StripResult,
+};
 
 /// Errors of the nesting crate. Part errors name the part.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -89,7 +89,7 @@ impl Part {
 }
 
 /// Removes consecutive duplicates (and a closing duplicate).
-fn dedup_points(pts: &mut Vec<[f64; 2]>) {
+pub(crate) fn dedup_points(pts: &mut Vec<[f64; 2]>) {
     pts.dedup_by(|a, b| (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9);
     while pts.len() > 1 {
         let (f, l) = (pts[0], pts[pts.len() - 1]);

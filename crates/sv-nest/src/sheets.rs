@@ -1,21 +1,16 @@
 //! Bin packing of parts onto rectangular stock sheets (`nest.json`).
 
-use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-use jagua_rs::entities::Item;
-use jagua_rs::geometry::fail_fast::SPSurrogateConfig;
 use jagua_rs::geometry::geo_enums::RotationRange;
-use jagua_rs::geometry::primitives::{Point, SPolygon};
-use jagua_rs::geometry::shape_modification::{offset_shape, ShapeModifyConfig, ShapeModifyMode};
-use jagua_rs::geometry::{AllowedOrientations, DTransformation, OriginalShape};
-use jagua_rs::io::import::centering_transformation;
+use jagua_rs::geometry::DTransformation;
 use rand::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{rect, rotated_bbox, Bin, Budget, Rng64};
-use crate::part::polygon_area;
-use crate::strip::Progress;
+use crate::engine::{rect, Bin, Budget, Rng64};
+use crate::prepare::{Kind, PartInfo, Prepared, Setup};
+use crate::shape::Rigid;
+use crate::strip::{Progress, DEFAULT_SEARCHES};
 use crate::{NestError, Part, DEFAULT_FLATTEN_TOLERANCE};
 
 /// Default sheet width (mm).
@@ -101,20 +96,6 @@ pub struct StockSheet {
     pub height: f64,
 }
 
-/// Largest area growth (ratio) when jagua-rs simplifies an outline for collision checks;
-/// simplification only adds area, so spacing still holds.
-const SIMPLIFY_TOLERANCE: f32 = 0.001;
-
-/// Pole surrogates of sheet parts: fewer poles than the strip-packing benchmark items get.
-/// Fabrication parts have hundreds of vertices (a 19-unit strip at 110 mm: about 580), and
-/// the poles cost about linear time each in the vertex count: 64 poles took 160 ms per
-/// such part, more than a short nesting budget.
-const SHEET_SURROGATE: SPSurrogateConfig = SPSurrogateConfig {
-    n_pole_limits: [(24, 0.0), (12, 0.8), (6, 0.9)],
-    ff_pole_area_ratio: 0.0,
-    n_ff_piers: 0,
-};
-
 /// Options of [`nest_sheets`].
 #[derive(Clone, Debug)]
 pub struct NestOptions {
@@ -130,9 +111,13 @@ pub struct NestOptions {
     pub flatten_tolerance: f64,
     /// RNG seed
     pub seed: u64,
-    /// wall-clock budget
+    /// wall-clock cap of the whole call, set-up included; also what the work budget is
+    /// derived from when `max_evaluations` is `None`
     pub time_limit: Duration,
-    /// optional cap on collision evaluations (deterministic budget)
+    /// work budget (collision evaluations), which decides the layout: the same parts,
+    /// options and seed give the same sheets on every machine unless the clock cuts the
+    /// search first (then [`SearchReport::cut_by_time`] says so); `None`: derived from
+    /// `time_limit` and the parts ([`sheet_work_budget`])
     pub max_evaluations: Option<u64>,
     /// samples per part in the constructive phase
     pub construct_samples: usize,
@@ -227,6 +212,28 @@ pub struct LeftOut {
     pub reason: String,
 }
 
+/// How far the search went (`nest.json` `search`; all zero in files written before it).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SearchReport {
+    /// the work budget (collision evaluations) that decides the layout
+    pub work_budget: u64,
+    /// collision evaluations the search did (all searches together)
+    pub evaluations: u64,
+    /// collision evaluations of the construction before it (never cut short: every part is
+    /// placed once)
+    pub construction_evaluations: u64,
+    /// whether the wall-clock cap stopped the search before its work budget was spent: the
+    /// layout may then differ from a run on a faster or less busy machine
+    pub cut_by_time: bool,
+}
+
+impl SearchReport {
+    /// Share of the work budget done (1 when it was spent).
+    pub fn done_fraction(&self) -> f64 {
+        (self.evaluations as f64 / self.work_budget.max(1) as f64).min(1.0)
+    }
+}
+
 /// `nest.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct NestReport {
@@ -242,6 +249,9 @@ pub struct NestReport {
     pub left_out: Vec<LeftOut>,
     /// offcut of the last sheet
     pub offcut: Option<Offcut>,
+    /// the work budget and what was done of it
+    #[serde(default)]
+    pub search: SearchReport,
 }
 
 /// Martello-Toth L2 and the area bound for item sizes `a` in bins of capacity `cap`.
@@ -274,24 +284,17 @@ pub fn lower_bounds(a: &[f64], cap: f64) -> LowerBounds {
     }
 }
 
-struct Prepared {
-    part: usize,
-    item: Arc<Item>,
-    /// centroid used by the pre-transform (f64)
-    centre: [f64; 2],
-    area: f64,
-}
-
-fn to_spolygon(pts: &[[f64; 2]]) -> Result<SPolygon, String> {
-    SPolygon::new(
-        pts.iter()
-            .map(|p| Point(p[0] as f32, p[1] as f32))
-            .collect(),
-    )
-    .map_err(|e| format!("{e:#}"))
-}
+/// A used sheet: its stock size (index into [`NestOptions::sheets`]) and its layout.
+type Sheet = (usize, Bin);
 
 /// Nests `parts` onto sheets. Bad parts are reported in `left_out`; the others are nested.
+///
+/// The set-up (outlines checked, congruent outlines grouped, one collision shape per group)
+/// runs on every core while the construction places the parts, largest first, sheet after
+/// sheet. Then [`DEFAULT_SEARCHES`] searches side by side, each from the construction with
+/// its own seed and an equal share of the work budget, try to empty the last sheet into the
+/// others and to compact it towards the left; the best wins (fewest sheets, then the
+/// largest offcut, then the first search), so the result does not depend on the threads.
 pub fn nest_sheets(
     parts: &[Part],
     opts: &NestOptions,
@@ -309,233 +312,448 @@ pub fn nest_sheets(
             "margin and spacing must be >= 0, flatten tolerance > 0".into(),
         ));
     }
-    // the clock starts here: preparing the parts (outlines, surrogates) is part of the budget
-    let mut budget = Budget::new(opts.time_limit, opts.max_evaluations);
-    let range = opts.rotations.range()?;
+    // the clock starts here: the set-up is part of the budget
+    let started = Instant::now();
     let (m, s) = (opts.margin, opts.spacing);
-    let grow = s / 2.0 + opts.flatten_tolerance + 1e-3 + s * 1e-3;
-    // containers: inflated parts inside [m - s/2, W - m + s/2]
-    let usable: Vec<(f64, f64, f64, f64)> = opts
-        .sheets
+    let setup = Setup {
+        // half the spacing, an allowance for f32 coordinates and for congruent parts
+        // sharing a shape
+        grow: s / 2.0 + 1e-3 + s * 1e-3,
+        tolerance: opts.flatten_tolerance,
+        range: opts.rotations.range()?,
+        // grown parts inside [m - s/2, W - m + s/2]
+        usable: opts
+            .sheets
+            .iter()
+            .map(|st| {
+                (
+                    m - s / 2.0,
+                    m - s / 2.0,
+                    st.width - m + s / 2.0,
+                    st.height - m + s / 2.0,
+                )
+            })
+            .collect(),
+        half_spacing: s / 2.0,
+    };
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let prepared = Prepared::new(parts);
+    let mut left_out: Vec<LeftOut> = prepared
+        .bad
         .iter()
-        .map(|st| {
-            (
-                m - s / 2.0,
-                m - s / 2.0,
-                st.width - m + s / 2.0,
-                st.height - m + s / 2.0,
-            )
+        .map(|(i, reason)| LeftOut {
+            part: parts[*i].id.clone(),
+            reason: reason.clone(),
         })
         .collect();
-    // outlines, collision shapes and surrogates: the costly part of the set-up, so it runs
-    // on every core; results are gathered in part order (deterministic)
-    let prepare = |pi: usize| -> Result<(Prepared, f64), LeftOut> {
-        let part = &parts[pi];
-        let bad = |reason: String| LeftOut {
-            part: part.id.clone(),
-            reason,
-        };
-        let pts = part
-            .validated_outline(opts.flatten_tolerance)
-            .map_err(|e| bad(e.to_string()))?;
-        let shape = to_spolygon(&pts).map_err(|e| bad(format!("part {}: {e}", part.id)))?;
-        let pre = centering_transformation(&shape);
-        let (cx, cy) = pre.translation();
-        let orig = OriginalShape {
-            shape: shape.clone(),
-            pre_transform: pre,
-            modify_mode: ShapeModifyMode::Inflate,
-            modify_config: ShapeModifyConfig {
-                offset: Some(grow as f32),
-                // conservative (the outline only grows): 0.1 % of the area at most
-                simplify_tolerance: Some(SIMPLIFY_TOLERANCE),
-                ..ShapeModifyConfig::default()
-            },
-        };
-        let item = AllowedOrientations::new(range.clone(), vec![])
-            .and_then(|ao| Item::new(pi, pi as u64, orig, ao, None, SHEET_SURROGATE))
-            .map(Arc::new)
-            .map_err(|e| bad(format!("part {}: {e:#}", part.id)))?;
-        // fits some sheet in some rotation?
-        let rots: Vec<f32> = match &range {
-            RotationRange::None => vec![0.0],
-            RotationRange::Discrete(r) => r.clone(),
-            RotationRange::Continuous => (0..360).map(|d| (d as f32).to_radians()).collect(),
-        };
-        let fits = usable.iter().any(|u| {
-            rots.iter().any(|&r| {
-                let b = rotated_bbox(item.shape_cd(), r);
-                f64::from(b.x_max - b.x_min) <= u.2 - u.0
-                    && f64::from(b.y_max - b.y_min) <= u.3 - u.1
-            })
-        });
-        if !fits {
-            let (lo, hi) = crate::part::bbox(&pts);
-            return Err(bad(NestError::TooLarge {
-                part: part.id.clone(),
-                width: hi[0] - lo[0] + s,
-                height: hi[1] - lo[1] + s,
-            }
-            .to_string()));
+    let mut rng = Rng64::seed_from_u64(opts.seed);
+    let mut budget = Budget::new(started, opts.time_limit, None);
+    // the set-up on the other cores while this one places
+    let bins = std::thread::scope(|scope| {
+        for _ in 1..threads.min(prepared.kind_count()) {
+            scope.spawn(|| prepared.work(parts, &setup));
         }
-        let area = polygon_area(&pts).abs();
-        let lb_area = if s > 0.0 {
-            offset_shape(&shape, ShapeModifyMode::Inflate, (s / 2.0) as f32)
-                .map(|sp| f64::from(sp.area()))
-                .unwrap_or(area)
-        } else {
-            area
-        };
-        let p = Prepared {
-            part: pi,
-            item,
-            centre: [-f64::from(cx), -f64::from(cy)],
-            area,
-        };
-        Ok((p, lb_area))
-    };
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .clamp(1, parts.len().max(1));
-    let mut results: Vec<Option<Result<(Prepared, f64), LeftOut>>> =
-        (0..parts.len()).map(|_| None).collect();
-    std::thread::scope(|scope| {
-        let prepare = &prepare;
-        let handles: Vec<_> = (0..threads)
-            .map(|t| {
-                scope.spawn(move || {
-                    (t..parts.len())
-                        .step_by(threads)
-                        .map(|pi| (pi, prepare(pi)))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        for h in handles {
-            // a panic in a worker is a bug; re-raise it here
-            for (pi, r) in h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)) {
-                results[pi] = Some(r);
-            }
-        }
+        construct(
+            parts,
+            &prepared,
+            &setup,
+            opts,
+            &mut rng,
+            &mut budget,
+            &mut left_out,
+        )
     });
-    let mut left_out = Vec::new();
-    let mut prepared = Vec::new();
-    let mut lb_sizes = Vec::new();
-    for r in results.into_iter().flatten() {
-        match r {
-            Ok((p, lb_area)) => {
-                lb_sizes.push(lb_area);
-                prepared.push(p);
-            }
-            Err(l) => left_out.push(l),
-        }
-    }
-    let cap = usable
+    let kind = |k: usize| -> &Kind {
+        prepared
+            .kind(k, parts, &setup)
+            .as_ref()
+            .expect("placed parts have a shape")
+    };
+    let construction_evaluations = budget.evals;
+    let placed: Vec<&PartInfo> = bins
+        .iter()
+        .flat_map(|(_, b)| b.members.iter().map(|mm| &prepared.parts[mm.inst]))
+        .collect();
+    let lb_sizes: Vec<f64> = placed.iter().map(|p| kind(p.kind).lb_area).collect();
+    let cap = setup
+        .usable
         .iter()
         .map(|u| (u.2 - u.0) * (u.3 - u.1))
         .fold(0.0, f64::max);
     let lbs = lower_bounds(&lb_sizes, cap);
     let lb = lbs.area.max(lbs.martello_toth);
-
-    let mut rng = Rng64::seed_from_u64(opts.seed);
-    let mut order: Vec<usize> = (0..prepared.len()).collect();
-    let key = |p: &Prepared| {
-        let sh = p.item.shape_cd();
-        sh.surrogate().convex_hull_area * sh.diameter()
+    let mean_vertices = placed
+        .iter()
+        .map(|p| kind(p.kind).item.shape_cd().vertices().len() as f64)
+        .sum::<f64>()
+        / placed.len().max(1) as f64;
+    let shape_vertices: usize = prepared
+        .kinds_made()
+        .map(|k| k.item.shape_cd().vertices().len())
+        .sum();
+    let fixed = fixed_seconds(shape_vertices, construction_evaluations);
+    let work = opts
+        .max_evaluations
+        .unwrap_or_else(|| sheet_work_budget(mean_vertices, opts.time_limit, fixed));
+    let area_of = |inst: usize| prepared.parts[inst].area;
+    let sheet_area = |st: usize| opts.sheets[st].width * opts.sheets[st].height;
+    // the search works on the emptiest sheets (the cost of a search does not grow with
+    // the job); their parts get the search's shapes, made on every core
+    let [rest, window] = split_window(bins);
+    let in_window: Vec<usize> = {
+        let mut k: Vec<usize> = window
+            .iter()
+            .flat_map(|(_, b)| b.members.iter().map(|m| prepared.parts[m.inst].kind))
+            .collect();
+        k.sort_unstable();
+        k.dedup();
+        k
     };
-    order.sort_by(|&a, &b| {
-        key(&prepared[b])
-            .total_cmp(&key(&prepared[a]))
-            .then(a.cmp(&b))
-    });
-    let mk_bin = |stock: usize| {
-        let u = usable[stock];
-        Bin::new(rect(u.0 as f32, u.1 as f32, u.2 as f32, u.3 as f32))
-    };
-    let mut bins: Vec<(usize, Bin)> = Vec::new();
-    for &pi in &order {
-        let item = &prepared[pi].item;
-        let mut placed = false;
-        for (_, bin) in bins.iter_mut() {
-            if let Some(dt) = bin.blf_position(
-                item,
-                opts.construct_samples,
-                f32::MAX,
-                &mut rng,
-                &mut budget,
-            ) {
-                bin.add(pi, item, dt);
-                placed = true;
-                break;
+    let rich = crate::prepare::parallel_map(in_window.len(), |i| kind(in_window[i]).rich());
+    let window: Vec<Sheet> = window
+        .into_iter()
+        .map(|(st, b)| {
+            let mut nb = Bin::new(b.bounds);
+            for m in &b.members {
+                let k = prepared.parts[m.inst].kind;
+                let item = &rich[in_window.binary_search(&k).expect("a window kind")];
+                nb.add(m.inst, item, m.dt);
             }
-        }
-        if !placed {
-            for stock in 0..usable.len() {
-                let mut bin = mk_bin(stock);
-                if let Some(dt) = bin.blf_position(
-                    item,
-                    opts.construct_samples.max(200),
-                    f32::MAX,
-                    &mut rng,
-                    &mut budget,
-                ) {
-                    bin.add(pi, item, dt);
-                    bins.push((stock, bin));
-                    placed = true;
-                    break;
-                }
-            }
-        }
-        if !placed {
-            left_out.push(LeftOut {
-                part: parts[prepared[pi].part].id.clone(),
-                reason: format!(
-                    "part {}: no feasible position found on an empty sheet",
-                    parts[prepared[pi].part].id
-                ),
-            });
-        }
-    }
+            (st, nb)
+        })
+        .collect();
+    let rest_used: f64 = rest.iter().map(|(st, _)| sheet_area(*st)).sum();
+    let rest_area: f64 = rest
+        .iter()
+        .flat_map(|(_, b)| b.members.iter().map(|m| area_of(m.inst)))
+        .sum();
     let report_progress =
-        |bins: &[(usize, Bin)], budget: &Budget, progress: &mut dyn FnMut(&Progress)| {
-            let used: f64 = bins
-                .iter()
-                .map(|(st, _)| opts.sheets[*st].width * opts.sheets[*st].height)
-                .sum();
-            let area: f64 = bins
-                .iter()
-                .flat_map(|(_, b)| b.members.iter().map(|m| prepared[m.inst].area))
-                .sum();
+        |window: &[Sheet], budget: &Budget, progress: &mut dyn FnMut(&Progress)| {
+            let used: f64 = rest_used + window.iter().map(|(st, _)| sheet_area(*st)).sum::<f64>();
+            let area: f64 = rest_area
+                + window
+                    .iter()
+                    .flat_map(|(_, b)| b.members.iter().map(|m| area_of(m.inst)))
+                    .sum::<f64>();
             progress(&Progress {
                 elapsed_s: budget.elapsed().as_secs_f64(),
                 evaluations: budget.evals,
-                best: bins.len() as f64,
+                work_fraction: f64::from(budget.fraction()),
+                best: (rest.len() + window.len()) as f64,
                 density: if used > 0.0 { area / used } else { 0.0 },
             });
         };
-    report_progress(&bins, &budget, progress);
+    // the searches, side by side; each gets its share of the work
+    let searches = DEFAULT_SEARCHES as u64;
+    let share = work / searches;
+    let others = rest.len();
+    let results: Vec<Searched> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (1..searches)
+            .map(|k| {
+                let mut mine = window.clone();
+                let seed = opts.seed ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+                scope.spawn(move || {
+                    let mut b = Budget::new(started, opts.time_limit, Some(share));
+                    let mut r = Rng64::seed_from_u64(seed);
+                    improve(&mut mine, others, lb, &mut r, &mut b, opts, &mut |_, _| {});
+                    (mine, b.evals, b.was_cut())
+                })
+            })
+            .collect();
+        let mut first = window.clone();
+        let mut b = Budget::new(started, opts.time_limit, Some(share));
+        improve(
+            &mut first,
+            others,
+            lb,
+            &mut rng,
+            &mut b,
+            opts,
+            &mut |w, b| report_progress(w, b, progress),
+        );
+        let mut all = vec![(first, b.evals, b.was_cut())];
+        for h in handles {
+            all.push(h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
+        }
+        all
+    });
+    let evaluations: u64 = results.iter().map(|r| r.1).sum();
+    let cut = results.iter().any(|r| r.2);
+    let (window, _, _) = results
+        .into_iter()
+        .enumerate()
+        .min_by(|(i, a), (j, b)| {
+            a.0.len()
+                .cmp(&b.0.len())
+                .then(last_x(&a.0).total_cmp(&last_x(&b.0)))
+                .then(i.cmp(j))
+        })
+        .map(|(_, r)| r)
+        .expect("one search at least");
+    let mut bins = rest;
+    bins.extend(window);
 
-    // phase 1: try to empty the last sheet into the others
-    let phase1_evals = opts.max_evaluations.map(|e| e / 2);
-    let phase1_time = opts.time_limit / 2;
-    let phase1_done = |b: &Budget| {
-        b.done() || phase1_evals.is_some_and(|e| b.evals >= e) || b.elapsed() >= phase1_time
+    // report
+    let mut sheets = Vec::new();
+    for (stock, bin) in &bins {
+        let st = opts.sheets[*stock];
+        let mut placements: Vec<(usize, PartPlacement)> = bin
+            .members
+            .iter()
+            .map(|mem| {
+                let info = &prepared.parts[mem.inst];
+                let k = kind(info.kind);
+                // part -> representative -> shape (centred) -> sheet
+                let to_shape = Rigid {
+                    rotation: 0.0,
+                    translation: [-k.centre[0], -k.centre[1]],
+                }
+                .after(&info.frame);
+                let (tx, ty) = mem.dt.translation();
+                let on_sheet = Rigid {
+                    rotation: f64::from(mem.dt.rotation()),
+                    translation: [f64::from(tx), f64::from(ty)],
+                }
+                .after(&to_shape);
+                (
+                    info.part,
+                    PartPlacement {
+                        strip: parts[info.part].id.clone(),
+                        translation: on_sheet.translation,
+                        rotation_deg: on_sheet.rotation.to_degrees().rem_euclid(360.0),
+                    },
+                )
+            })
+            .collect();
+        placements.sort_by_key(|p| p.0);
+        let area: f64 = bin.members.iter().map(|mm| area_of(mm.inst)).sum();
+        sheets.push(SheetReport {
+            width: st.width,
+            height: st.height,
+            placements: placements.into_iter().map(|p| p.1).collect(),
+            utilisation: area / (st.width * st.height),
+        });
+    }
+    let offcut = bins.last().map(|(stock, bin)| {
+        let st = opts.sheets[*stock];
+        // used_x_max is on grown outlines; the true part edge is `grow` inside it
+        let x = (f64::from(bin.used_x_max()) - setup.grow + s).min(st.width);
+        Offcut {
+            sheet: bins.len() - 1,
+            x,
+            y: 0.0,
+            width: (st.width - x).max(0.0),
+            height: st.height,
+        }
+    });
+    left_out.sort_by_key(|l| parts.iter().position(|p| p.id == l.part));
+    Ok(NestReport {
+        sheet: SheetSpec {
+            width: opts.sheets[0].width,
+            height: opts.sheets[0].height,
+            margin: m,
+            spacing: s,
+        },
+        sheets,
+        lower_bound_sheets: lb,
+        lower_bounds: lbs,
+        left_out,
+        offcut,
+        search: SearchReport {
+            work_budget: work,
+            evaluations,
+            construction_evaluations,
+            cut_by_time: cut,
+        },
+    })
+}
+
+/// What one search ends with: its sheets, its evaluations, whether the clock cut it.
+type Searched = (Vec<Sheet>, u64, bool);
+
+/// Right end of the parts on the last sheet (the smaller, the larger the offcut).
+fn last_x(bins: &[Sheet]) -> f32 {
+    bins.last().map_or(0.0, |(_, b)| b.used_x_max())
+}
+
+/// Sheets a part's failure closes: after this many parts in a row that did not fit, a sheet
+/// is full (the remaining, smaller parts go on the next ones; the search repacks the end).
+const FAILURES_TO_CLOSE: usize = 12;
+
+/// The construction: parts largest first onto sheets filled one after another. A sheet
+/// takes every remaining part that fits, until [`FAILURES_TO_CLOSE`] parts in a row did not
+/// fit; a part is not tried on a sheet whose free area is smaller, nor when a part no larger
+/// (in area and both sides of its bounding box) did not fit there. A new sheet takes the
+/// first stock size that holds its first part. Each try samples positions near the sheet's
+/// filled front first.
+fn construct(
+    parts: &[Part],
+    prepared: &Prepared,
+    setup: &Setup,
+    opts: &NestOptions,
+    rng: &mut Rng64,
+    budget: &mut Budget,
+    left_out: &mut Vec<LeftOut>,
+) -> Vec<Sheet> {
+    let mk_bin = |stock: usize| {
+        let u = setup.usable[stock];
+        Bin::new(rect(u.0 as f32, u.1 as f32, u.2 as f32, u.3 as f32))
     };
-    while bins.len() > lb.max(1) && !phase1_done(&budget) {
-        let saved: Vec<_> = bins.iter().map(|(_, b)| b.save()).collect();
-        let (last_stock, mut last) = bins.pop().expect("non-empty");
+    let mut bins: Vec<Sheet> = Vec::new();
+    let mut remaining: Vec<usize> = (0..prepared.parts.len()).collect();
+    while !remaining.is_empty() {
+        let mut later = Vec::new();
+        let mut open: Option<Sheet> = None;
+        let mut free = 0.0;
+        // (area, shorter side, longer side) of the shapes that did not fit
+        let mut failed: Vec<(f64, f64, f64)> = Vec::new();
+        let mut in_a_row = 0;
+        for (n, &pi) in remaining.iter().enumerate() {
+            let info = &prepared.parts[pi];
+            let kind = match prepared.kind(info.kind, parts, setup) {
+                Ok(k) => k,
+                Err(reason) => {
+                    left_out.push(LeftOut {
+                        part: parts[info.part].id.clone(),
+                        reason: reason.clone(),
+                    });
+                    continue;
+                }
+            };
+            if in_a_row >= FAILURES_TO_CLOSE {
+                later.extend_from_slice(&remaining[n..]);
+                break;
+            }
+            let Some((_, bin)) = open.as_mut() else {
+                // a new sheet: the first stock size that holds the part
+                let mut placed = false;
+                for stock in 0..setup.usable.len() {
+                    let mut bin = mk_bin(stock);
+                    let samples = opts.construct_samples.max(200);
+                    if let Some(dt) = bin.blf_position(&kind.item, samples, f32::MAX, rng, budget) {
+                        bin.add(pi, &kind.item, dt);
+                        let u = setup.usable[stock];
+                        free = (u.2 - u.0) * (u.3 - u.1) - kind.area;
+                        open = Some((stock, bin));
+                        placed = true;
+                        break;
+                    }
+                }
+                if !placed {
+                    let id = &parts[info.part].id;
+                    left_out.push(LeftOut {
+                        part: id.clone(),
+                        reason: format!("part {id}: no feasible position found on an empty sheet"),
+                    });
+                }
+                continue;
+            };
+            let (a, s0, s1) = (kind.area, kind.sides.0, kind.sides.1);
+            if a > free || failed.iter().any(|f| a >= f.0 && s0 >= f.1 && s1 >= f.2) {
+                later.push(pi);
+                continue;
+            }
+            let front = bin.used_x_max() + kind.item.shape_cd().diameter();
+            match bin.blf_position(&kind.item, opts.construct_samples, front, rng, budget) {
+                Some(dt) => {
+                    bin.add(pi, &kind.item, dt);
+                    free -= kind.area;
+                    in_a_row = 0;
+                }
+                None => {
+                    failed.push((a, s0, s1));
+                    later.push(pi);
+                    in_a_row += 1;
+                }
+            }
+        }
+        if let Some(b) = open {
+            bins.push(b);
+        }
+        remaining = later;
+    }
+    bins
+}
+
+/// The sheets the search works on: the [`WINDOW`] emptiest (ties: the later), split from
+/// the others; both keep their order.
+fn split_window(bins: Vec<Sheet>) -> [Vec<Sheet>; 2] {
+    let mut by_area: Vec<usize> = (0..bins.len()).collect();
+    by_area.sort_by(|&a, &b| {
+        bins[a]
+            .1
+            .area()
+            .total_cmp(&bins[b].1.area())
+            .then(b.cmp(&a))
+    });
+    let mut chosen = vec![false; bins.len()];
+    for &i in by_area.iter().take(WINDOW) {
+        chosen[i] = true;
+    }
+    let (mut rest, mut window) = (Vec::new(), Vec::new());
+    for (i, b) in bins.into_iter().enumerate() {
+        if chosen[i] {
+            window.push(b);
+        } else {
+            rest.push(b);
+        }
+    }
+    [rest, window]
+}
+
+/// Hears of the sheets of the search's window and its budget.
+type Reporter<'a> = &'a mut dyn FnMut(&[Sheet], &Budget);
+
+/// Sheets the search works on (the emptiest ones).
+const WINDOW: usize = 7;
+
+/// The search on `window` (the emptiest sheets; `others` more are not touched): while there
+/// are more sheets than the lower bound and half the work is not spent, try to empty the
+/// emptiest sheet into the others (each part into the first of the emptiest sheets that
+/// takes it, else inserted with overlap into the emptiest one and separated); then move the
+/// emptiest sheet last and compact it towards the left so that the offcut is one rectangle.
+/// `report` hears of every sheet saved.
+fn improve(
+    window: &mut Vec<Sheet>,
+    others: usize,
+    lb: usize,
+    rng: &mut Rng64,
+    budget: &mut Budget,
+    opts: &NestOptions,
+    report: Reporter<'_>,
+) {
+    let work = budget.work().unwrap_or(u64::MAX);
+    let phase1_done = |b: &Budget| b.done() || b.evals >= work / 2;
+    let emptiest_last = |w: &mut Vec<Sheet>| {
+        if let Some(k) =
+            (0..w.len()).min_by(|&a, &b| w[a].1.area().total_cmp(&w[b].1.area()).then(b.cmp(&a)))
+        {
+            let b = w.remove(k);
+            w.push(b);
+        }
+    };
+    emptiest_last(window);
+    while window.len() >= 2 && others + window.len() > lb.max(1) && !phase1_done(budget) {
+        let (last_stock, mut last) = window.pop().expect("non-empty");
+        let mut targets: Vec<usize> = (0..window.len()).collect();
+        targets.sort_by(|&a, &b| {
+            window[a]
+                .1
+                .area()
+                .total_cmp(&window[b].1.area())
+                .then(a.cmp(&b))
+        });
+        let saved: Vec<_> = targets.iter().map(|&t| window[t].1.save()).collect();
+        let saved_last = last.save();
         let mut ok = true;
         while let Some(mem) = last.members.last().cloned() {
             let idx = last.members.len() - 1;
             let mut moved = false;
-            for (_, bin) in bins.iter_mut() {
-                if let Some(dt) = bin.blf_position(
-                    &mem.item,
-                    opts.construct_samples,
-                    f32::MAX,
-                    &mut rng,
-                    &mut budget,
-                ) {
+            for &t in &targets {
+                let bin = &mut window[t].1;
+                if let Some(dt) =
+                    bin.blf_position(&mem.item, opts.construct_samples, f32::MAX, rng, budget)
+                {
                     bin.add(mem.inst, &mem.item, dt);
                     moved = true;
                     break;
@@ -543,22 +761,10 @@ pub fn nest_sheets(
             }
             if !moved {
                 // insert with overlap into the emptiest sheet and separate
-                let target = (0..bins.len())
-                    .min_by(|&a, &b| bins[a].1.area().total_cmp(&bins[b].1.area()))
-                    .expect("at least one sheet");
-                let bin = &mut bins[target].1;
+                let bin = &mut window[targets[0]].1;
                 let snap = bin.save();
-                let rot = crate::engine::sample_rotation(&mem.item, &mut rng);
-                let rb = rotated_bbox(mem.item.shape_cd(), rot);
-                let b = bin.bounds;
-                let tx = b.x_min - rb.x_min
-                    + rand::Rng::random_range(&mut rng, 0.0..=1.0f32)
-                        * ((b.x_max - rb.x_max) - (b.x_min - rb.x_min)).max(0.0);
-                let ty = b.y_min - rb.y_min
-                    + rand::Rng::random_range(&mut rng, 0.0..=1.0f32)
-                        * ((b.y_max - rb.y_max) - (b.y_min - rb.y_min)).max(0.0);
-                bin.add(mem.inst, &mem.item, DTransformation::new(rot, (tx, ty)));
-                if bin.separate(&mut rng, &mut budget, 2, 25) {
+                bin.add_anywhere(mem.inst, &mem.item, rng);
+                if bin.separate(rng, budget, 2, 25) {
                     moved = true;
                 } else {
                     bin.restore(&snap);
@@ -569,23 +775,24 @@ pub fn nest_sheets(
                 break;
             }
             last.remove(idx);
-            if phase1_done(&budget) && !last.members.is_empty() {
+            if phase1_done(budget) && !last.members.is_empty() {
                 ok = false;
                 break;
             }
         }
         if ok && last.members.is_empty() {
-            report_progress(&bins, &budget, progress);
+            emptiest_last(window);
+            report(window, budget);
         } else {
-            bins.push((last_stock, last));
-            for ((_, b), sn) in bins.iter_mut().zip(&saved) {
-                b.restore(sn);
+            last.restore(&saved_last);
+            for (&t, sn) in targets.iter().zip(&saved) {
+                window[t].1.restore(sn);
             }
+            window.push((last_stock, last));
         }
     }
-
-    // phase 2: compact the last sheet towards x_min so the offcut is one rectangle
-    if let Some((_, last)) = bins.last_mut() {
+    // compact the last sheet towards x_min so the offcut is one rectangle
+    if let Some((_, last)) = window.last_mut() {
         let full = last.bounds;
         let slack = |x: f32| x + (x.abs() * 1e-5).max(1e-5);
         let mut best_x = slack(last.used_x_max());
@@ -606,7 +813,7 @@ pub fn nest_sheets(
                     );
                 }
             }
-            if last.separate(&mut rng, &mut budget, 2, 30) {
+            if last.separate(rng, budget, 2, 30) {
                 best_x = slack(last.used_x_max());
                 last.set_bounds(rect(full.x_min, full.y_min, best_x, full.y_max));
                 best = last.save();
@@ -618,68 +825,29 @@ pub fn nest_sheets(
         last.restore(&best);
         last.set_bounds(full);
     }
-    report_progress(&bins, &budget, progress);
+    report(window, budget);
+}
 
-    // report
-    let mut sheets = Vec::new();
-    for (stock, bin) in &bins {
-        let st = opts.sheets[*stock];
-        let mut placements: Vec<(usize, PartPlacement)> = bin
-            .members
-            .iter()
-            .map(|mem| {
-                let p = &prepared[mem.inst];
-                let rot = f64::from(mem.dt.rotation());
-                let (tx, ty) = mem.dt.translation();
-                let (sn, cs) = rot.sin_cos();
-                let [cx, cy] = p.centre;
-                // p_sheet = R (p - c) + t
-                let t = [
-                    f64::from(tx) - (cs * cx - sn * cy),
-                    f64::from(ty) - (sn * cx + cs * cy),
-                ];
-                (
-                    p.part,
-                    PartPlacement {
-                        strip: parts[p.part].id.clone(),
-                        translation: t,
-                        rotation_deg: rot.to_degrees().rem_euclid(360.0),
-                    },
-                )
-            })
-            .collect();
-        placements.sort_by_key(|p| p.0);
-        let area: f64 = bin.members.iter().map(|mm| prepared[mm.inst].area).sum();
-        sheets.push(SheetReport {
-            width: st.width,
-            height: st.height,
-            placements: placements.into_iter().map(|p| p.1).collect(),
-            utilisation: area / (st.width * st.height),
-        });
-    }
-    let offcut = bins.last().map(|(stock, bin)| {
-        let st = opts.sheets[*stock];
-        // used_x_max is on grown outlines; the true part edge is `grow` inside it
-        let x = (f64::from(bin.used_x_max()) - grow + s).min(st.width);
-        Offcut {
-            sheet: bins.len() - 1,
-            x,
-            y: 0.0,
-            width: (st.width - x).max(0.0),
-            height: st.height,
-        }
-    });
-    Ok(NestReport {
-        sheet: SheetSpec {
-            width: opts.sheets[0].width,
-            height: opts.sheets[0].height,
-            margin: m,
-            spacing: s,
-        },
-        sheets,
-        lower_bound_sheets: lb,
-        lower_bounds: lbs,
-        left_out,
-        offcut,
-    })
+/// Seconds per collision evaluation of the sheet search on the reference machine (2 cores)
+/// for parts of `vertices` collision vertices on average: a fixed part and a part per
+/// vertex, fitted to the CPU time of the pavilion and the dome (docs/nesting.md).
+fn sheet_seconds_per_evaluation(vertices: f64) -> f64 {
+    1.0e-6 + 0.045e-6 * vertices
+}
+
+/// Wall seconds of the set-up and the construction on the reference machine, from what
+/// they did: jagua-rs's two pole searches per shape (about linear in its vertices, on both
+/// cores) and the construction's evaluations (on one).
+fn fixed_seconds(shape_vertices: usize, construction_evaluations: u64) -> f64 {
+    35e-6 * shape_vertices as f64 + 3e-6 * construction_evaluations as f64
+}
+
+/// The work budget of [`nest_sheets`] when none is given: what the searches (one per core)
+/// do on the reference machine in a share of the time the set-up and construction leave
+/// (`fixed` seconds, [`fixed_seconds`]), scaled with the parts (shapes of `mean_vertices`
+/// vertices). The rest is headroom, so that a busy machine still finishes the same work.
+fn sheet_work_budget(mean_vertices: f64, time: Duration, fixed: f64) -> u64 {
+    let searches = DEFAULT_SEARCHES as f64;
+    let seconds = crate::engine::WORK_SHARE_OF_TIME * (time.as_secs_f64() - fixed).max(0.0);
+    (seconds * searches / sheet_seconds_per_evaluation(mean_vertices)) as u64
 }

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use jagua_rs::entities::Item;
 use jagua_rs::io::export::int_to_ext_transformation;
@@ -65,16 +65,21 @@ impl StripInstance {
 /// Options of [`nest_strip`].
 #[derive(Clone, Debug)]
 pub struct StripOptions {
-    /// RNG seed; same seed and same evaluation budget give the same layout
+    /// RNG seed; the same seed and work budget give the same layout on every machine
     pub seed: u64,
-    /// wall-clock budget
+    /// wall-clock cap of each search; also what the work budget is derived from when
+    /// `max_evaluations` is `None`
     pub time_limit: Duration,
-    /// optional cap on collision evaluations (deterministic budget)
+    /// work budget of each search (collision evaluations), which decides the layout; `None`:
+    /// derived from `time_limit` and the instance ([`strip_work_budget`])
     pub max_evaluations: Option<u64>,
+    /// let the clock alone decide, without a work budget (benchmarks at equal time only:
+    /// the layout then depends on the machine's speed and load)
+    pub clock_decides: bool,
     /// samples per item in the constructive phase
     pub construct_samples: usize,
     /// independent searches run side by side (seeds derived from `seed`), the best kept;
-    /// default: one per core
+    /// a fixed number (not the machine's core count), so the result is the same everywhere
     pub threads: usize,
 }
 
@@ -93,14 +98,41 @@ fn half_normal(rng: &mut Rng64) -> f32 {
 /// Default wall-clock budget of [`StripOptions`].
 pub const DEFAULT_STRIP_SECONDS: u64 = 10;
 
+/// Independent searches of [`nest_strip`] by default: one per core of the reference machine
+/// (2 cores). A constant, so that the layout does not depend on the machine it runs on.
+pub const DEFAULT_SEARCHES: usize = 2;
+
+/// Seconds per collision evaluation of one search on the reference machine (2 cores) for
+/// items of `vertices` collision vertices on average: a fixed part and a part per vertex,
+/// fitted to the CPU time of the 13 ESICUP instances (docs/nesting.md; within about 25 %).
+fn strip_seconds_per_evaluation(vertices: f64) -> f64 {
+    0.9e-6 + 0.11e-6 * vertices
+}
+
+/// The work budget of each search of [`nest_strip`] when none is given: what one search does
+/// in `time` on the reference machine, scaled with the instance (more vertices per item,
+/// slower evaluations), at a share of the time that leaves room for a busy machine.
+pub fn strip_work_budget(inst: &StripInstance, time: Duration) -> u64 {
+    let (n, v) = inst.items.iter().fold((0.0, 0.0), |(n, v), (it, q)| {
+        (
+            n + *q as f64,
+            v + *q as f64 * it.shape_cd().vertices().len() as f64,
+        )
+    });
+    let per_item = if n > 0.0 { v / n } else { 10.0 };
+    (crate::engine::WORK_SHARE_OF_TIME * time.as_secs_f64()
+        / strip_seconds_per_evaluation(per_item)) as u64
+}
+
 impl Default for StripOptions {
     fn default() -> Self {
         Self {
             seed: 0,
             time_limit: Duration::from_secs(DEFAULT_STRIP_SECONDS),
             max_evaluations: None,
+            clock_decides: false,
             construct_samples: 400,
-            threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            threads: DEFAULT_SEARCHES,
         }
     }
 }
@@ -112,6 +144,8 @@ pub struct Progress {
     pub elapsed_s: f64,
     /// collision evaluations so far
     pub evaluations: u64,
+    /// share of the work budget used (of the time when the clock decides), 0..1
+    pub work_fraction: f64,
     /// best objective so far (strip length, or number of sheets)
     pub best: f64,
     /// density / utilisation of the best solution
@@ -144,6 +178,11 @@ pub struct StripResult {
     pub placements: Vec<StripPlacement>,
     /// collision evaluations used
     pub evaluations: u64,
+    /// the work budget of each search (`None` when the clock decided)
+    pub work_budget: Option<u64>,
+    /// whether the wall-clock cap stopped a search short of its work budget (the layout
+    /// may then differ from a run on a faster or less busy machine)
+    pub cut_by_time: bool,
     /// seconds used
     pub elapsed_s: f64,
 }
@@ -161,8 +200,16 @@ pub fn nest_strip(
 ) -> StripResult {
     let threads = opts.threads.max(1);
     if threads == 1 {
-        return nest_strip_one(inst, opts, progress);
+        let one = StripOptions {
+            max_evaluations: work_of(inst, opts),
+            ..opts.clone()
+        };
+        return nest_strip_one(inst, &one, progress);
     }
+    let opts = &StripOptions {
+        max_evaluations: work_of(inst, opts),
+        ..opts.clone()
+    };
     std::thread::scope(|scope| {
         let others: Vec<_> = (1..threads as u64)
             .map(|k| {
@@ -175,16 +222,31 @@ pub fn nest_strip(
             .collect();
         let mut best = nest_strip_one(inst, opts, progress);
         let mut evaluations = best.evaluations;
+        let mut cut = best.cut_by_time;
         for h in others {
             let r = h.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
             evaluations += r.evaluations;
+            cut |= r.cut_by_time;
             if r.length < best.length {
                 best = r;
             }
         }
         best.evaluations = evaluations;
+        best.cut_by_time = cut;
         best
     })
+}
+
+/// The work budget of each search: given, derived from the time, or none (the clock decides).
+fn work_of(inst: &StripInstance, opts: &StripOptions) -> Option<u64> {
+    if opts.clock_decides {
+        None
+    } else {
+        Some(
+            opts.max_evaluations
+                .unwrap_or_else(|| strip_work_budget(inst, opts.time_limit)),
+        )
+    }
 }
 
 fn nest_strip_one(
@@ -193,7 +255,7 @@ fn nest_strip_one(
     progress: &mut dyn FnMut(&Progress),
 ) -> StripResult {
     let mut rng = Rng64::seed_from_u64(opts.seed);
-    let mut budget = Budget::new(opts.time_limit, opts.max_evaluations);
+    let mut budget = Budget::new(Instant::now(), opts.time_limit, opts.max_evaluations);
     let sep = inst.min_item_separation;
     let h = inst.height;
     // copies, largest (convex hull area x diameter) first
@@ -238,6 +300,7 @@ fn nest_strip_one(
         progress(&Progress {
             elapsed_s: budget.elapsed().as_secs_f64(),
             evaluations: budget.evals,
+            work_fraction: f64::from(budget.fraction()),
             best: f64::from(len),
             density: density_of(len),
         });
@@ -247,8 +310,7 @@ fn nest_strip_one(
     // from one of the failed layouts at the same length (the less overlap, the likelier),
     // disrupted by swapping two large items
     let mut pool: Vec<(f32, crate::engine::BinSnapshot)> = Vec::new();
-    // (a spent budget has fraction 1)
-    while budget.fraction() < EXPLORE_SHARE {
+    while !budget.done() && budget.fraction() < EXPLORE_SHARE {
         let loss = bin.separate_loss(&mut rng, &mut budget, 3, 200);
         if loss == 0.0 {
             let used = fit(&mut bin);
@@ -313,6 +375,8 @@ fn nest_strip_one(
         density: density_of(best_len),
         placements: placements.into_iter().map(|p| p.1).collect(),
         evaluations: budget.evals,
+        work_budget: budget.work(),
+        cut_by_time: budget.was_cut(),
         elapsed_s: budget.elapsed().as_secs_f64(),
     }
 }

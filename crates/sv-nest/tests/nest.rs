@@ -225,6 +225,133 @@ fn free_rotation_and_two_stock_sizes() {
     check_report(&parts, &report, &opts, &[]);
 }
 
+/// Busy-loops on `n` threads until the returned guard is dropped: a loaded machine.
+struct Burners {
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    handles: Vec<std::thread::JoinHandle<()>>,
+}
+
+impl Burners {
+    fn start(n: usize) -> Self {
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let handles = (0..n)
+            .map(|k| {
+                let stop = stop.clone();
+                std::thread::spawn(move || {
+                    let mut x = k as u64 + 1;
+                    while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                        for _ in 0..10_000 {
+                            x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
+                        }
+                        std::hint::black_box(x);
+                    }
+                })
+            })
+            .collect();
+        Self { stop, handles }
+    }
+}
+
+impl Drop for Burners {
+    fn drop(&mut self) {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        for h in self.handles.drain(..) {
+            let _ = h.join();
+        }
+    }
+}
+
+/// The work budget decides: the same sheets and strip layout (two searches on two threads)
+/// with the machine quiet and with every core busy, and nothing was cut by the clock.
+#[test]
+fn a_busy_machine_gets_the_same_layout() {
+    let parts: Vec<Part> = test_parts().into_iter().take(14).collect();
+    let opts = NestOptions {
+        max_evaluations: Some(30_000),
+        ..small_opts()
+    };
+    let inst = StripInstance::read(&dataset("jakobs1")).unwrap();
+    let so = StripOptions {
+        time_limit: Duration::from_secs(600),
+        max_evaluations: Some(20_000),
+        threads: 2,
+        ..StripOptions::default()
+    };
+    let quiet = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+    let quiet_strip = nest_strip(&inst, &so, &mut |_| {});
+    let (busy, busy_strip) = {
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        let _load = Burners::start(2 * cores);
+        (
+            nest_sheets(&parts, &opts, &mut |_| {}).unwrap(),
+            nest_strip(&inst, &so, &mut |_| {}),
+        )
+    };
+    assert_eq!(quiet, busy);
+    assert!(!quiet.search.cut_by_time);
+    assert_eq!(quiet.search.work_budget, 30_000);
+    assert_eq!(quiet_strip.placements, busy_strip.placements);
+    assert_eq!(quiet_strip.length, busy_strip.length);
+    assert!(!quiet_strip.cut_by_time && !busy_strip.cut_by_time);
+    assert_eq!(quiet_strip.work_budget, Some(20_000));
+    // both searches spent their work: 2 x the budget, give or take the last move
+    assert!(
+        quiet_strip.evaluations >= 40_000 && quiet_strip.evaluations < 41_000,
+        "{}",
+        quiet_strip.evaluations
+    );
+}
+
+/// A time cap shorter than the work stops the search and says so; the construction is never
+/// cut (every part is placed once). Without a given work budget one is derived from the time
+/// the set-up leaves: linear in it, and none without time.
+#[test]
+fn the_time_cap_cuts_the_search_and_says_by_how_much() {
+    let parts: Vec<Part> = test_parts().into_iter().take(10).collect();
+    let capped = NestOptions {
+        time_limit: Duration::ZERO,
+        max_evaluations: Some(10_000_000),
+        ..small_opts()
+    };
+    let r = nest_sheets(&parts, &capped, &mut |_| {}).unwrap();
+    assert!(r.search.cut_by_time);
+    assert!(r.search.evaluations == 0 && r.search.construction_evaluations > 0);
+    check_report(&parts, &r, &capped, &[]);
+    let derived = |ms: u64| {
+        let o = NestOptions {
+            time_limit: Duration::from_millis(ms),
+            max_evaluations: None,
+            ..small_opts()
+        };
+        nest_sheets(&parts, &o, &mut |_| {}).unwrap().search
+    };
+    // linear in the time the set-up leaves: each 100 ms more adds the same work
+    let (w1, w2, w3) = (derived(200), derived(300), derived(400));
+    assert!(w1.work_budget > 10_000, "{w1:?}");
+    let (d1, d2) = (
+        w2.work_budget - w1.work_budget,
+        w3.work_budget - w2.work_budget,
+    );
+    assert!(d1 > 0 && d1.abs_diff(d2) <= 2, "{w1:?} {w2:?} {w3:?}");
+    assert_eq!(derived(0).work_budget, 0);
+    let inst = StripInstance::read(&dataset("jakobs1")).unwrap();
+    let s1 = sv_nest::strip_work_budget(&inst, Duration::from_secs(1));
+    let s3 = sv_nest::strip_work_budget(&inst, Duration::from_secs(3));
+    assert!(s1 > 10_000 && (s3 as f64 / s1 as f64 - 3.0).abs() < 1e-3);
+    let cut = nest_strip(
+        &inst,
+        &StripOptions {
+            time_limit: Duration::ZERO,
+            max_evaluations: Some(10_000_000),
+            threads: 1,
+            ..StripOptions::default()
+        },
+        &mut |_| {},
+    );
+    assert!(cut.cut_by_time && cut.evaluations < 10_000_000);
+    assert_eq!(cut.placements.len(), 25);
+}
+
 #[test]
 fn same_seed_same_budget_same_layout() {
     let parts: Vec<Part> = test_parts().into_iter().take(12).collect();
