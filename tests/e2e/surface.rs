@@ -301,8 +301,10 @@ fn automatic_layouts_build_through_to_the_sheets() {
             &target,
             "--out",
             name,
+            "--nest-evaluations",
+            "100000",
             "--nest-seconds",
-            "1",
+            "3600",
             "--quiet",
         ]);
         let report = read_json(&dir.join(&format!("{name}/report.json")));

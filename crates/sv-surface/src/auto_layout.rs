@@ -22,7 +22,7 @@
 use sv_frame::QuadMesh;
 use sv_geom::{Point3, Real, Vector3};
 
-use crate::target::TargetIndex;
+use crate::target::{loop_arc, loop_at, TargetIndex};
 use crate::SurfaceError;
 
 /// Boundary turning above which a point is a corner of the footprint.
@@ -40,29 +40,6 @@ const O_GRID_INNER: Real = 0.7;
 struct Corner {
     at: usize,
     reflex: bool,
-}
-
-/// Arc length at every vertex of a loop (`len + 1` values, the last the perimeter).
-fn loop_arc(points: &[Point3], lp: &[usize]) -> Vec<Real> {
-    let m = lp.len();
-    let mut arc = vec![0.0; m + 1];
-    for k in 0..m {
-        arc[k + 1] = arc[k] + (points[lp[(k + 1) % m]] - points[lp[k]]).norm();
-    }
-    arc
-}
-
-/// Point of the loop at arc length `s` (wrapped).
-fn loop_at(points: &[Point3], lp: &[usize], arc: &[Real], s: Real) -> Point3 {
-    let m = lp.len();
-    let s = s.rem_euclid(arc[m]);
-    let k = arc
-        .partition_point(|&a| a <= s)
-        .saturating_sub(1)
-        .min(m - 1);
-    let len = arc[k + 1] - arc[k];
-    let t = if len > 0.0 { (s - arc[k]) / len } else { 0.0 };
-    points[lp[k]] + (points[lp[(k + 1) % m]] - points[lp[k]]) * t
 }
 
 /// Corners of the outer loop in loop order: local maxima of the turning over `window`
