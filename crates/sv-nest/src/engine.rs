@@ -143,6 +143,14 @@ pub(crate) struct Bin {
     pub workers: usize,
 }
 
+/// What one worker's move pass left: the overlapping pairs, their weighted sum, and the
+/// evaluations it spent.
+struct Pass {
+    overlaps: Vec<(usize, usize, f32)>,
+    loss: f32,
+    evals: u64,
+}
+
 /// Snapshot of a [`Bin`].
 #[derive(Clone)]
 pub(crate) struct BinSnapshot {
@@ -888,8 +896,8 @@ impl Bin {
 
     /// One move pass on [`Bin::workers`] copies of the layout at once (sparrow's
     /// separator workers): each moves the colliding items in its own random order, and the
-    /// copy with the least weighted overlap is kept (ties: the first), so the result does
-    /// not depend on the threads. Returns its overlaps.
+    /// copy with the least weighted overlap is kept (ties: the first, this one), so the
+    /// result does not depend on the threads. Returns its overlaps.
     fn move_pass_on_workers(
         &mut self,
         colliding: &[usize],
@@ -907,49 +915,47 @@ impl Bin {
             for &i in &order {
                 bin.move_item(i, gls, &mut rng, &mut b, &mut collector);
             }
-            let ov = bin.overlaps(&mut collector);
-            let weighted: f32 = ov.iter().map(|&(i, j, o)| gls.get(i, j.min(n)) * o).sum();
-            (ov, weighted, b.evals)
+            let overlaps = bin.overlaps(&mut collector);
+            let loss = overlaps
+                .iter()
+                .map(|&(i, j, o)| gls.get(i, j.min(n)) * o)
+                .sum();
+            Pass {
+                overlaps,
+                loss,
+                evals: b.evals,
+            }
         };
-        let copies: Vec<Bin> = (1..self.workers).map(|_| self.clone()).collect();
-        let helpers: Vec<Budget> = (1..self.workers).map(|_| budget.helper()).collect();
-        let mine = budget.helper();
-        let (first, others) = std::thread::scope(|scope| {
+        let mut copies: Vec<Bin> = (1..self.workers).map(|_| self.clone()).collect();
+        let mut passes: Vec<Pass> = std::thread::scope(|scope| {
             let handles: Vec<_> = copies
-                .into_iter()
-                .zip(helpers)
+                .iter_mut()
                 .zip(&seeds[1..])
-                .map(|((mut bin, b), &seed)| {
-                    scope.spawn(move || {
-                        let r = run(&mut bin, seed, b);
-                        (bin, r)
-                    })
+                .map(|(bin, &seed)| {
+                    let b = budget.helper();
+                    scope.spawn(move || run(bin, seed, b))
                 })
                 .collect();
-            let first = run(self, seeds[0], mine);
-            let others: Vec<_> = handles
-                .into_iter()
-                .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                .collect();
-            (first, others)
+            let mut passes = vec![run(self, seeds[0], budget.helper())];
+            passes.extend(
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
+            );
+            passes
         });
-        budget.evals += first.2 + others.iter().map(|o| o.1 .2).sum::<u64>();
-        // the first copy with less weighted overlap than this one (ties: the earlier)
-        let mut best: Option<(Bin, (Vec<(usize, usize, f32)>, f32, u64))> = None;
-        let mut best_loss = first.1;
-        for (bin, r) in others {
-            if r.1 < best_loss {
-                best_loss = r.1;
-                best = Some((bin, r));
+        budget.evals += passes.iter().map(|p| p.evals).sum::<u64>();
+        let best = (1..passes.len()).fold(0, |b, k| {
+            if passes[k].loss < passes[b].loss {
+                k
+            } else {
+                b
             }
+        });
+        if best > 0 {
+            *self = copies.swap_remove(best - 1);
         }
-        match best {
-            Some((bin, (ov, _, _))) => {
-                *self = bin;
-                ov
-            }
-            None => first.0,
-        }
+        passes.swap_remove(best).overlaps
     }
 
     /// Moves the container's right edge to `x_max`: the items whose bbox centre is right of
