@@ -467,7 +467,7 @@ fn esicup_fu_far_above_lbf_with_a_fixed_budget() {
     let inst = StripInstance::read(&dataset("fu")).unwrap();
     let opts = StripOptions {
         time_limit: Duration::from_secs(600),
-        max_evaluations: Some(400_000),
+        max_evaluations: Some(800_000),
         searches: 1,
         workers: 2,
         ..StripOptions::default()
@@ -475,6 +475,7 @@ fn esicup_fu_far_above_lbf_with_a_fixed_budget() {
     let res = nest_strip(&inst, &opts, &mut |_| {});
     assert_eq!(res.placements.len(), 12);
     // lbf_seed0_density_pct for fu in best_known_spp.csv is 70.32 %; with this fixed budget
-    // the separator reaches 85.8-86.4 % over seeds 0-2
+    // (both workers' evaluations) the search reaches 86.3 % with seed 0 (84.4-87.5 % over
+    // seeds 0-2)
     assert!(res.density * 100.0 > 85.0, "density {}", res.density);
 }
