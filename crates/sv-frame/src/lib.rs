@@ -30,7 +30,7 @@ pub use file::{
     FrameFile, FrameParams, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT,
 };
 pub use hub::{hubs_from_mesh, Hub};
-pub use mesh::{normal_cone_residual, Link, MeshChecks, QuadMesh};
+pub use mesh::{normal_cone, normal_cone_residual, Link, MeshChecks, QuadMesh};
 pub use solve::{
     evaluate, solve, Evaluation, GapObjective, Progress, SidePolicy, SolveOptions, SolveReport,
     Solved, DEFAULT_SPIN_ANGLE, STALL_WINDOW,

@@ -341,15 +341,11 @@ impl QuadMesh {
     }
 }
 
-/// Largest angle (rad) between a unit normal and the cone of normals that fits them best:
-/// axis `a` (unit) and `c` minimising `sum (n_i . a - c)^2`, i.e. `a` the eigenvector of
-/// the smallest eigenvalue of the normals' covariance and `c` the mean of `n_i . a`. Zero
-/// exactly when the normals lie on one circle of the Gauss sphere.
-pub fn normal_cone_residual(normals: &[Vector3]) -> Real {
-    if normals.len() < 4 {
-        return 0.0;
-    }
-    let mean = normals.iter().sum::<Vector3>() / normals.len() as Real;
+/// Axis (unit, on the side of the normals' mean) and cosine of the cone that fits the unit
+/// `normals` best: the eigenvector of the smallest eigenvalue of their covariance, and the
+/// mean of `n . axis`.
+pub fn normal_cone(normals: &[Vector3]) -> (Vector3, Real) {
+    let mean = normals.iter().sum::<Vector3>() / normals.len().max(1) as Real;
     let mut cov = sv_geom::Matrix3::zeros();
     for n in normals {
         let d = n - mean;
@@ -359,9 +355,23 @@ pub fn normal_cone_residual(normals: &[Vector3]) -> Real {
     let k = (0..3)
         .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
         .unwrap_or(0);
-    let axis: Vector3 = eig.eigenvectors.column(k).into();
-    let c = mean.dot(&axis).clamp(-1.0, 1.0);
-    let half = c.acos();
+    let mut axis: Vector3 = eig.eigenvectors.column(k).into();
+    if axis.dot(&mean) < 0.0 {
+        axis = -axis;
+    }
+    (axis, mean.dot(&axis))
+}
+
+/// Largest angle (rad) between a unit normal and the cone of normals that fits them best:
+/// axis `a` (unit) and `c` minimising `sum (n_i . a - c)^2`, i.e. `a` the eigenvector of
+/// the smallest eigenvalue of the normals' covariance and `c` the mean of `n_i . a`. Zero
+/// exactly when the normals lie on one circle of the Gauss sphere.
+pub fn normal_cone_residual(normals: &[Vector3]) -> Real {
+    if normals.len() < 4 {
+        return 0.0;
+    }
+    let (axis, c) = normal_cone(normals);
+    let half = c.clamp(-1.0, 1.0).acos();
     normals
         .iter()
         .map(|n| (n.dot(&axis).clamp(-1.0, 1.0).acos() - half).abs())

@@ -64,7 +64,7 @@ fn main() {
         max_iterations: env("ITERS", d.max_iterations as f64) as usize,
         ..d
     };
-    println!("| target | unit | faces | planarity max | conical max (deg) | closeness | boundary | coverage | edge ratio <= 1.25 | fit max | gap max (mm) | gap % unit | secondary s | primary s |");
+    println!("| target | unit | faces | planarity max | conical max (deg) | closeness | boundary | coverage | edge ratio <= 1.25 | fit max | sides / unit | irregular | gap max (mm) | gap % unit | secondary s | primary s |");
     for spec in specs {
         let target = if spec.starts_with("builtin:") {
             builtin_target(&spec).expect("builtin")
@@ -91,7 +91,7 @@ fn main() {
             }
         };
         println!(
-            "| {spec} | {unit} | {} | {:.5} | {:.3} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {:.1} | {:.2} % | {:.2} | {:.2} |",
+            "| {spec} | {unit} | {} | {:.5} | {:.3} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {:.2}-{:.2} | {} | {:.1} | {:.2} % | {:.2} | {:.2} |",
             r.faces,
             r.planarity_max,
             r.conical_max_deg,
@@ -100,6 +100,9 @@ fn main() {
             r.coverage,
             r.edge_ratio_fraction,
             r.rhombus_fit_max,
+            r.side_min,
+            r.side_max,
+            r.irregular_vertices.len(),
             gap,
             100.0 * gap / unit,
             ts,

@@ -16,7 +16,7 @@ use std::collections::HashMap;
 use sv_frame::QuadMesh;
 use sv_geom::{Point3, Real, Vector3};
 
-use crate::target::TargetIndex;
+use crate::target::{loop_arc, loop_at, TargetIndex};
 use crate::{SecondaryOptions, SurfaceError};
 
 /// Union-find over the coarse edges.
@@ -289,21 +289,8 @@ fn boundary_turning(index: &TargetIndex<'_>, h: Real) -> Vec<Vec<Real>> {
         .iter()
         .map(|lp| {
             let m = lp.len();
-            let mut arc = vec![0.0; m + 1];
-            for k in 0..m {
-                arc[k + 1] = arc[k] + (v[lp[(k + 1) % m]] - v[lp[k]]).norm();
-            }
-            let per = arc[m];
-            let at = |s: Real| {
-                let s = s.rem_euclid(per);
-                let k = arc
-                    .partition_point(|&a| a <= s)
-                    .saturating_sub(1)
-                    .min(m - 1);
-                let len = arc[k + 1] - arc[k];
-                let t = if len > 0.0 { (s - arc[k]) / len } else { 0.0 };
-                v[lp[k]] + (v[lp[(k + 1) % m]] - v[lp[k]]) * t
-            };
+            let arc = loop_arc(v, lp);
+            let at = |s: Real| loop_at(v, lp, &arc, s);
             (0..m)
                 .map(|k| {
                     let p = v[lp[k]];

@@ -23,6 +23,7 @@
 //! assert!(report.planarity_max < 0.01);
 //! ```
 
+mod auto_layout;
 mod builtin;
 mod error;
 mod layout;
@@ -54,8 +55,8 @@ pub fn build_secondary(
 ) -> Result<(QuadMesh, SecondaryReport), SurfaceError> {
     opts.check()?;
     let index = target::TargetIndex::new(target)?;
-    let grid = param::initial_grid_indexed(&index, opts)?;
-    optimise::optimise_indexed(&index, grid, opts, optimise::Pins::Corners, progress)
+    let initial = param::initial_mesh_indexed(&index, opts)?;
+    optimise::optimise_indexed(&index, initial, opts, optimise::Pins::Corners, progress)
 }
 
 /// Target surface and the designer's coarse quad layout to optimised hub mesh:

@@ -223,7 +223,7 @@ pub(crate) fn optimise_indexed(
             .iter()
             .map(|&(f, _)| Vector3::from_column_slice(&x[nbase + 3 * f..nbase + 3 * f + 3]))
             .collect();
-        let (axis, cosine) = normal_cone(&normals);
+        let (axis, cosine) = sv_frame::normal_cone(&normals);
         x[cbase + 4 * c..cbase + 4 * c + 3].copy_from_slice(axis.as_slice());
         x[cbase + 4 * c + 3] = cosine;
     }
@@ -564,26 +564,6 @@ pub(crate) fn optimise_indexed(
         report.unmet.push(s);
     }
     Ok((mesh, report))
-}
-
-/// Axis and cosine of the cone of unit normals that fits them best (see
-/// `sv_frame::normal_cone_residual`).
-fn normal_cone(normals: &[Vector3]) -> (Vector3, Real) {
-    let mean = normals.iter().sum::<Vector3>() / normals.len().max(1) as Real;
-    let mut cov = sv_geom::Matrix3::zeros();
-    for n in normals {
-        let d = n - mean;
-        cov += d * d.transpose();
-    }
-    let eig = cov.symmetric_eigen();
-    let k = (0..3)
-        .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
-        .unwrap_or(0);
-    let mut axis: Vector3 = eig.eigenvectors.column(k).into();
-    if axis.dot(&mean) < 0.0 {
-        axis = -axis;
-    }
-    (axis, mean.dot(&axis))
 }
 
 /// Longest over shortest edge of a quad.

@@ -86,28 +86,45 @@ pub(crate) fn target_frame(mesh: &TargetMesh) -> Frame {
 /// The initial hub grid on `target` at `opts.unit_size`: a structured `nx` x `ny` quad
 /// grid whose outer ring lies on the target boundary (corners where the boundary is
 /// extreme along the frame diagonals and turns most) and whose lattice follows the
-/// conformal map of the patch onto a rectangle, so its faces start out square.
+/// conformal map of the patch onto a rectangle, so its faces start out square. Where the
+/// footprint needs irregular vertices (no corner, three or five corners, an L, a hole) it
+/// is instead the automatic coarse layout subdivided to the unit size (`auto_layout.rs`).
 pub fn initial_grid(
     target: &TargetMesh,
     opts: &SecondaryOptions,
 ) -> Result<QuadMesh, SurfaceError> {
     opts.check()?;
     let index = TargetIndex::new(target)?;
-    initial_grid_indexed(&index, opts)
+    initial_mesh_indexed(&index, opts)
 }
 
-pub(crate) fn initial_grid_indexed(
+/// The initial hub mesh: the automatic coarse layout subdivided where the footprint
+/// needs irregular vertices (`auto_layout.rs`), else the four-corner conformal grid.
+pub(crate) fn initial_mesh_indexed(
+    index: &TargetIndex<'_>,
+    opts: &SecondaryOptions,
+) -> Result<QuadMesh, SurfaceError> {
+    match crate::auto_layout::coarse_layout(index)? {
+        Some(coarse) => {
+            let (area, h) = (index.mesh.area(), opts.unit_size);
+            if area < 4.0 * h * h {
+                return Err(SurfaceError::TooSmall(format!(
+                    "area {:.3} m^2 holds fewer than 4 units of {h} mm",
+                    area * 1e-6
+                )));
+            }
+            crate::layout::layout_mesh_indexed(index, &coarse, opts)
+        }
+        None => initial_grid_indexed(index, opts),
+    }
+}
+
+fn initial_grid_indexed(
     index: &TargetIndex<'_>,
     opts: &SecondaryOptions,
 ) -> Result<QuadMesh, SurfaceError> {
     let target = index.mesh;
     let h = opts.unit_size;
-    if index.loops.len() > 1 {
-        return Err(SurfaceError::NeedsLayout(format!(
-            "the target has {} boundary loops (holes); the automatic grid maps a patch with one boundary onto a rectangle: give the layout of the roof as a coarse quad mesh (--layout COARSE.obj, [surface] layout)",
-            index.loops.len()
-        )));
-    }
     let frame = target_frame(target);
     let lp = &index.boundary;
     let m = lp.len();

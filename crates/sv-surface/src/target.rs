@@ -247,6 +247,29 @@ pub(crate) fn closest_on_triangle(
     (a + ab * v + ac * w, [1.0 - v - w, v, w])
 }
 
+/// Arc length at every vertex of a loop (`len + 1` values, the last the perimeter).
+pub(crate) fn loop_arc(points: &[Point3], lp: &[usize]) -> Vec<Real> {
+    let m = lp.len();
+    let mut arc = vec![0.0; m + 1];
+    for k in 0..m {
+        arc[k + 1] = arc[k] + (points[lp[(k + 1) % m]] - points[lp[k]]).norm();
+    }
+    arc
+}
+
+/// Point of the loop at arc length `s` (wrapped).
+pub(crate) fn loop_at(points: &[Point3], lp: &[usize], arc: &[Real], s: Real) -> Point3 {
+    let m = lp.len();
+    let s = s.rem_euclid(arc[m]);
+    let k = arc
+        .partition_point(|&a| a <= s)
+        .saturating_sub(1)
+        .min(m - 1);
+    let len = arc[k + 1] - arc[k];
+    let t = if len > 0.0 { (s - arc[k]) / len } else { 0.0 };
+    points[lp[k]] + (points[lp[(k + 1) % m]] - points[lp[k]]) * t
+}
+
 /// A validated target with acceleration structures for closest-point queries (to the
 /// surface and to its boundary loops), for the optimiser, the report and any later stage
 /// that moves hub vertices on the target.

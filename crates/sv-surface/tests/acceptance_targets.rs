@@ -5,34 +5,10 @@
 //! Three files cannot meet every goal (their boundaries cut across the curvature lines,
 //! docs/secondary.md): there the stage must return an unfolded mesh and name what is unmet.
 
-use std::path::PathBuf;
+mod common;
 
-use sv_geom::Point3;
-use sv_surface::{build_secondary, SecondaryOptions, TargetMesh};
-
-/// The OBJ subset the generator writes: `v x y z` and `f a b c` (1-based).
-fn load(name: &str) -> TargetMesh {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fixtures/targets")
-        .join(name);
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
-    let mut m = TargetMesh::default();
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f64> = it.map(|s| s.parse().unwrap()).collect();
-                m.vertices.push(Point3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let i: Vec<usize> = it.map(|s| s.parse::<usize>().unwrap() - 1).collect();
-                m.triangles.push([i[0], i[1], i[2]]);
-            }
-            _ => {}
-        }
-    }
-    m
-}
+use common::load;
+use sv_surface::{build_secondary, SecondaryOptions};
 
 /// Runs both stages at `unit` mm, asserts every secondary goal and the frame checks;
 /// returns the largest link gap / unit side.

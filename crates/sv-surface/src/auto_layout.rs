@@ -1,0 +1,251 @@
+//! Automatic coarse layouts for footprints that one four-sided patch cannot follow.
+//!
+//! A quad mesh of a disc satisfies `sum over boundary vertices (2 - faces) + sum over
+//! interior vertices (4 - valence) = 4`: a convex corner of the footprint (one face)
+//! counts +1, a reflex one (three faces) -1, a valence-3 interior vertex +1, a valence-5
+//! one -1. Four convex corners need no irregular vertex (the conformal grid of
+//! `param.rs`); any other footprint does, or a reflex corner. From the corners of the
+//! outer boundary (where it turns by more than 45 degrees over a window of a fortieth of
+//! the perimeter) this module draws a coarse layout that [`crate::layout`] subdivides to
+//! the unit size like a designer's:
+//!
+//! | footprint | coarse layout | irregular vertices |
+//! |---|---|---|
+//! | no corner (oval, disc) | O-grid: an inner quad and a ring of four faces | four of valence 3 |
+//! | 3 or 5+ convex corners (triangle, pentagon) | one face per corner around a centre | the centre, valence = corners |
+//! | 5 convex corners and one reflex (L) | three faces meeting at the reflex corner | none (the reflex corner has three faces) |
+//! | two boundary loops (annulus) | a ring of eight faces | none |
+//!
+//! Everything else (four corners, one or two corners, several reflex corners) goes to
+//! the four-corner grid.
+
+use sv_frame::QuadMesh;
+use sv_geom::{Point3, Real, Vector3};
+
+use crate::target::{loop_arc, loop_at, TargetIndex};
+use crate::SurfaceError;
+
+/// Boundary turning above which a point is a corner of the footprint.
+const CORNER_TURN: Real = std::f64::consts::FRAC_PI_4;
+
+/// Faces of the ring layout of an annulus.
+const RING_FACES: usize = 8;
+
+/// Inner quad of the O-grid: its corners lie this fraction of the way from the centre to
+/// the boundary points.
+const O_GRID_INNER: Real = 0.7;
+
+/// A corner of a boundary loop: its position in the loop and whether it turns inwards.
+#[derive(Clone, Copy, Debug)]
+struct Corner {
+    at: usize,
+    reflex: bool,
+}
+
+/// Corners of the outer loop in loop order: local maxima of the turning over `window`
+/// either side, above [`CORNER_TURN`], at least two windows apart.
+fn corners(index: &TargetIndex<'_>, lp: &[usize], window: Real) -> Vec<Corner> {
+    let v = &index.mesh.vertices;
+    let arc = loop_arc(v, lp);
+    let turn_over = |k: usize, w: Real| {
+        let p = v[lp[k]];
+        let a = p - loop_at(v, lp, &arc, arc[k] - w);
+        let b = loop_at(v, lp, &arc, arc[k] + w) - p;
+        if a.norm() == 0.0 || b.norm() == 0.0 {
+            return (0.0, false);
+        }
+        // the outer loop runs counter-clockwise seen from the target's normal side
+        let left = a.cross(&b).dot(&index.closest(&p).normal) >= 0.0;
+        (a.angle(&b), !left)
+    };
+    let turn: Vec<(Real, bool)> = (0..lp.len()).map(|k| turn_over(k, window)).collect();
+    let mut order: Vec<usize> = (0..lp.len()).filter(|&k| turn[k].0 > CORNER_TURN).collect();
+    order.sort_by(|&a, &b| turn[b].0.total_cmp(&turn[a].0).then(a.cmp(&b)));
+    let per = arc[lp.len()];
+    let apart = |a: usize, b: usize| {
+        let d = (arc[a] - arc[b]).abs();
+        d.min(per - d) > 2.0 * window
+    };
+    let mut chosen: Vec<usize> = Vec::new();
+    for k in order {
+        if chosen.iter().all(|&c| apart(c, k)) {
+            chosen.push(k);
+        }
+    }
+    chosen.sort_unstable();
+    chosen
+        .into_iter()
+        .map(|at| Corner {
+            at,
+            reflex: turn[at].1,
+        })
+        .collect()
+}
+
+/// The automatic coarse layout of `index`'s target, or `None` where the four-corner grid
+/// applies (see the module documentation).
+pub(crate) fn coarse_layout(index: &TargetIndex<'_>) -> Result<Option<QuadMesh>, SurfaceError> {
+    let v = &index.mesh.vertices;
+    match index.loops.len() {
+        1 => {}
+        2 => return Ok(Some(ring(index))),
+        n => {
+            return Err(SurfaceError::NeedsLayout(format!(
+                "the target has {n} boundary loops (a roof with {} courtyards); the automatic layout handles one or two: give the layout as a coarse quad mesh (--layout COARSE.obj, [surface] layout)",
+                n - 1
+            )))
+        }
+    }
+    let lp = &index.boundary;
+    let window = index.perimeter() / 40.0;
+    let found = corners(index, lp, window);
+    let convex = found.iter().filter(|c| !c.reflex).count();
+    let reflex = found.len() - convex;
+    let arc = loop_arc(v, lp);
+    let point = |k: usize| v[lp[k]];
+    let mid = |a: usize, b: usize| {
+        let (sa, mut sb) = (arc[a], arc[b]);
+        if sb <= sa {
+            sb += arc[lp.len()];
+        }
+        loop_at(v, lp, &arc, 0.5 * (sa + sb))
+    };
+    let layout = match (convex, reflex) {
+        (0, 0) => o_grid(index),
+        (3, 0) | (5.., 0) => {
+            // one face per corner: corner, midpoint to the next corner, centre, midpoint
+            // from the previous corner
+            let k = found.len();
+            let centre = index
+                .closest(&crate::param::target_frame(index.mesh).centre)
+                .point;
+            let mut vertices: Vec<Point3> = found.iter().map(|c| point(c.at)).collect();
+            vertices.extend((0..k).map(|i| mid(found[i].at, found[(i + 1) % k].at)));
+            vertices.push(centre);
+            let faces = (0..k)
+                .map(|i| [i, k + i, 2 * k, k + (i + k - 1) % k])
+                .collect();
+            QuadMesh { vertices, faces }
+        }
+        (5, 1) => {
+            // an L: the reflex corner r, the corners around it c1 .. c5, the one opposite
+            // it c3; the points p, q where the sides through r, continued, meet the far
+            // sides
+            let r = found.iter().position(|c| c.reflex).unwrap_or(0);
+            let c = |i: usize| found[(r + i) % 6].at;
+            let closest_between = |a: usize, b: usize| {
+                let mut k = a;
+                let mut best = (Real::INFINITY, a);
+                while k != b {
+                    let d = (point(k) - point(c(0))).norm();
+                    if d < best.0 {
+                        best = (d, k);
+                    }
+                    k = (k + 1) % lp.len();
+                }
+                point(best.1)
+            };
+            let p = closest_between(c(3), c(4));
+            let q = closest_between(c(2), c(3));
+            // vertices: r, c1 .. c5, p, q
+            let mut vertices: Vec<Point3> = (0..6).map(|i| point(c(i))).collect();
+            vertices.push(p);
+            vertices.push(q);
+            let faces = vec![[3, 6, 0, 7], [6, 4, 5, 0], [7, 0, 1, 2]];
+            QuadMesh { vertices, faces }
+        }
+        _ => return Ok(None),
+    };
+    Ok(Some(layout))
+}
+
+/// Boundary points where the loop is extreme along the target frame's diagonals, in loop
+/// order, and the frame centre on the target.
+fn diagonal_extremes(index: &TargetIndex<'_>, lp: &[usize], count: usize) -> Vec<Point3> {
+    let v = &index.mesh.vertices;
+    let frame = crate::param::target_frame(index.mesh);
+    let mut at: Vec<usize> = (0..count)
+        .map(|k| {
+            let phi = std::f64::consts::FRAC_PI_4
+                + 2.0 * std::f64::consts::PI * k as Real / count as Real;
+            let dir: Vector3 = frame.d1 * phi.cos() + frame.d2 * phi.sin();
+            (0..lp.len())
+                .max_by(|&a, &b| {
+                    (v[lp[a]] - frame.centre)
+                        .dot(&dir)
+                        .total_cmp(&(v[lp[b]] - frame.centre).dot(&dir))
+                })
+                .unwrap_or(0)
+        })
+        .collect();
+    // loop order, starting anywhere
+    let first = at[0];
+    at.sort_by_key(|&k| (k + lp.len() - first) % lp.len());
+    at.dedup();
+    at.into_iter().map(|k| v[lp[k]]).collect()
+}
+
+/// O-grid of a footprint without corners: four boundary points at the extremes along the
+/// frame diagonals, an inner quad between them and the centre.
+fn o_grid(index: &TargetIndex<'_>) -> QuadMesh {
+    let rim = diagonal_extremes(index, &index.boundary, 4);
+    let centre = index
+        .closest(&crate::param::target_frame(index.mesh).centre)
+        .point;
+    let n = rim.len();
+    let mut vertices = rim.clone();
+    vertices.extend(rim.iter().map(|b| centre + (b - centre) * O_GRID_INNER));
+    let mut faces: Vec<[usize; 4]> = (0..n)
+        .map(|k| [k, (k + 1) % n, n + (k + 1) % n, n + k])
+        .collect();
+    if n == 4 {
+        faces.push([4, 5, 6, 7]);
+    }
+    QuadMesh { vertices, faces }
+}
+
+/// Ring of [`RING_FACES`] faces between the outer loop and the hole: outer points evenly
+/// by arc length, each joined to the hole's point in the same direction from the hole's
+/// centre.
+fn ring(index: &TargetIndex<'_>) -> QuadMesh {
+    let v = &index.mesh.vertices;
+    let (outer, inner) = (&index.loops[0], &index.loops[1]);
+    let arc = loop_arc(v, outer);
+    let hole =
+        Point3::from(inner.iter().map(|&i| v[i].coords).sum::<Vector3>() / inner.len() as Real);
+    let normal = index.closest(&hole).normal;
+    let flat = |d: Vector3| d - normal * normal.dot(&d);
+    let rim: Vec<Point3> = (0..RING_FACES)
+        .map(|k| {
+            loop_at(
+                v,
+                outer,
+                &arc,
+                arc[outer.len()] * k as Real / RING_FACES as Real,
+            )
+        })
+        .collect();
+    let court: Vec<Point3> = rim
+        .iter()
+        .map(|o| {
+            let dir = flat(o - hole);
+            let k = inner
+                .iter()
+                .max_by(|&&a, &&b| {
+                    let ca = flat(v[a] - hole).normalize().dot(&dir);
+                    let cb = flat(v[b] - hole).normalize().dot(&dir);
+                    ca.total_cmp(&cb)
+                })
+                .copied()
+                .unwrap_or(inner[0]);
+            v[k]
+        })
+        .collect();
+    let n = RING_FACES;
+    let mut vertices = rim;
+    vertices.extend(court);
+    let faces = (0..n)
+        .map(|k| [k, (k + 1) % n, n + (k + 1) % n, n + k])
+        .collect();
+    QuadMesh { vertices, faces }
+}
