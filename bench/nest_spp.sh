@@ -1,32 +1,74 @@
 #!/usr/bin/env bash
-# Strip-packing benchmark on the ESICUP set; writes the table into docs/nesting.md.
-# usage: bench/nest_spp.sh [SECONDS=60] [SEED=0]
+# Strip-packing benchmark on the 13 ESICUP instances, ours against sparrow side by side at
+# equal time and threads (the two runs of an instance interleaved, so both see the same
+# machine load), one column pair per time; writes the table into docs/nesting.md.
+#
+# usage: SPARROW=/path/to/sparrow bench/nest_spp.sh [SEED=0] [SECONDS...=15 60]
+#
+# SPARROW is a sparrow binary built from its source with 2 separator workers (n_workers in
+# its src/config.rs), so both sides use 2 threads. Without it the sparrow column is its
+# published 1200 s average (best_known_spp.csv) and the ratio is against that. Sparrow reads
+# the instances in its own format (the same shapes): SPARROW_INPUT, by default its source's
+# data/input beside target/release.
+# Raw results: target/bench/spp_SECONDS.csv (instance, ours %, sparrow %, load average).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-SECS="${1:-60}"; SEED="${2:-0}"
+SEED="${1:-0}"; shift || true
+TIMES=("${@:-15 60}")
+read -r -a TIMES <<< "${TIMES[*]}"
 DATA=../shared/datasets/nesting
 [ -d "$DATA" ] || DATA=/work/shared/datasets/nesting
+DATA=$(cd "$DATA" && pwd)
+INSTANCES="albano blaz1 dagli fu jakobs1 jakobs2 mao marques shapes0 shapes1 shirts swim trousers"
 cargo build --release -p sv-nest --example spp >/dev/null
-OUT=$(mktemp)
-{
-  echo "| instance | ours ${SECS}s density % | length | lbf density % | sparrow 1200 s avg % | gap to sparrow (pp) |"
-  echo "|---|---|---|---|---|---|"
-  for inst in albano blaz1 dagli fu jakobs1 jakobs2 mao marques shapes0 shapes1 shirts swim trousers; do
-    line=$(./target/release/examples/spp "$DATA/spp/$inst.json" --seconds "$SECS" --seed "$SEED" 2>/dev/null)
-    dens=$(echo "$line" | awk '{print $5}'); len=$(echo "$line" | awk '{print $3}')
-    ref=$(grep "^$inst," "$DATA/best_known_spp.csv")
-    lbf=$(echo "$ref" | cut -d, -f12); sp=$(echo "$ref" | cut -d, -f9)
-    gap=$(awk -v a="$sp" -v b="$dens" 'BEGIN{printf "%.2f", a-b}')
-    echo "| $inst | $dens | $len | $lbf | $sp | $gap |"
+OURS=$PWD/target/release/examples/spp
+mkdir -p target/bench
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+for secs in "${TIMES[@]}"; do
+  csv=target/bench/spp_$secs.csv
+  : > "$csv"
+  for inst in $INSTANCES; do
+    ours=$("$OURS" "$DATA/spp/$inst.json" --seconds "$secs" --seed "$SEED" 2>/dev/null | awk '{print $5}')
+    if [ -n "${SPARROW:-}" ]; then
+      input=${SPARROW_INPUT:-$(dirname "$SPARROW")/../../data/input}
+      (cd "$WORK" && "$SPARROW" -i "$input/$inst.json" -t "$secs" -s "$SEED" >/dev/null 2>&1)
+      sp=$(python3 -c "import json,sys; print(round(100 * json.load(open(sys.argv[1]))['solution']['density'], 2))" "$WORK/output/final_$inst.json")
+    else
+      sp=$(grep "^$inst," "$DATA/best_known_spp.csv" | cut -d, -f9)
+    fi
+    load=$(cut -d' ' -f1 /proc/loadavg)
+    echo "$inst,$ours,$sp,$load" | tee -a "$csv"
   done
-} > "$OUT"
-cat "$OUT"
+done
+TABLE=$WORK/table.md
+python3 - "$TABLE" "${SPARROW:+side by side}" "${TIMES[@]}" <<'EOF'
+import csv, statistics, sys
+out, mode, times = sys.argv[1], sys.argv[2], sys.argv[3:]
+rows, medians = {}, {}
+for t in times:
+    ratios = []
+    for inst, ours, sp, load in csv.reader(open(f"target/bench/spp_{t}.csv")):
+        r = float(ours) / float(sp)
+        ratios.append(r)
+        rows.setdefault(inst, []).append((ours, sp, r, load))
+    medians[t] = (statistics.median(ratios), sum(r >= 1.0 for r in ratios), len(ratios))
+what = "sparrow" if mode else "sparrow 1200 s avg (published)"
+head = "| instance | " + " | ".join(f"ours {t} s % | {what} {t} s % | ratio {t} s" for t in times) + " |"
+with open(out, "w") as f:
+    print(head, file=f)
+    print("|---" * (1 + 3 * len(times)) + "|", file=f)
+    for inst, cells in rows.items():
+        print(f"| {inst} | " + " | ".join(f"{o} | {s} | {r:.3f}" for o, s, r, _ in cells) + " |", file=f)
+    print("| **median ratio** | " + " | ".join(
+        f" | | **{m:.3f}** ({k} of {n} >= 1)" for m, k, n in medians.values()) + " |", file=f)
+    loads = [float(c[3]) for cells in rows.values() for c in cells]
+    print(f"\nLoad average during the runs: {min(loads):.1f}-{max(loads):.1f}.", file=f)
+EOF
+cat "$TABLE"
 DOC=docs/nesting.md
 BEGIN='<!-- bench:begin -->'; END='<!-- bench:end -->'
-if grep -q "$BEGIN" "$DOC"; then
-  awk -v b="$BEGIN" -v e="$END" -v f="$OUT" -v s="$SECS" '
-    $0==b {print; print ""; print "Run: `bench/nest_spp.sh " s "` (two searches side by side on the 2 cores, seed 0, best kept)."; print ""; while ((getline l < f) > 0) print l; print ""; skip=1; next}
-    $0==e {skip=0}
-    !skip {print}' "$DOC" > "$DOC.tmp" && mv "$DOC.tmp" "$DOC"
-fi
-rm -f "$OUT"
+awk -v b="$BEGIN" -v e="$END" -v f="$TABLE" -v cmd="bench/nest_spp.sh $SEED ${TIMES[*]}" '
+  $0==b {print; print ""; print "Run: `SPARROW=... " cmd "` (seed as given; ours: one search on 2 workers; sparrow: 2 workers)."; print ""; while ((getline l < f) > 0) print l; print ""; skip=1; next}
+  $0==e {skip=0}
+  !skip {print}' "$DOC" > "$DOC.tmp" && mv "$DOC.tmp" "$DOC"

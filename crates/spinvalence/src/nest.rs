@@ -289,7 +289,7 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
                 "search".into(),
                 crate::sheets::search_row(
                     result.evaluations,
-                    result.work_budget.unwrap_or(result.evaluations) * options.threads as u64,
+                    result.work_budget.unwrap_or(result.evaluations) * options.searches as u64,
                     result.cut_by_time,
                     args.nest_seconds,
                 ),

@@ -1,8 +1,9 @@
 //! Strip-packing benchmark runner:
 //! `cargo run --release -p sv-nest --example spp -- FILE --seconds 60 --seed 0 [--evals N]
-//! [--threads T]`. With `--seconds` alone the clock decides (a benchmark at equal time, as
-//! sparrow runs); with `--evals` the work budget of each search does (the same layout on
-//! every machine) and the seconds only cap it.
+//! [--searches S] [--workers W]` (default one search on two workers: two threads). With
+//! `--seconds` alone the clock decides (a benchmark at equal time, as sparrow runs); with
+//! `--evals` the work budget of each search does (the same layout on every machine) and the
+//! seconds only cap it.
 #![allow(clippy::print_stdout)]
 
 use std::time::Duration;
@@ -13,7 +14,8 @@ fn main() {
     let mut secs = 10.0;
     let mut seed = 0;
     let mut evals = None;
-    let mut threads = sv_nest::strip::DEFAULT_SEARCHES;
+    let mut searches = 1;
+    let mut workers = sv_nest::strip::REFERENCE_CORES;
     let mut i = 0;
     while i < args.len() {
         match args[i].as_str() {
@@ -25,8 +27,12 @@ fn main() {
                 evals = Some(args[i + 1].parse().expect("evals"));
                 i += 1;
             }
-            "--threads" => {
-                threads = args[i + 1].parse().expect("threads");
+            "--workers" => {
+                workers = args[i + 1].parse().expect("workers");
+                i += 1;
+            }
+            "--searches" => {
+                searches = args[i + 1].parse().expect("searches");
                 i += 1;
             }
             "--seed" => {
@@ -44,7 +50,8 @@ fn main() {
         time_limit: Duration::from_secs_f64(secs),
         max_evaluations: evals,
         clock_decides: evals.is_none(),
-        threads,
+        searches,
+        workers,
         ..Default::default()
     };
     let (n, v) = inst.items.iter().fold((0, 0), |(n, v), (it, q)| {

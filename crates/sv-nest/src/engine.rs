@@ -92,6 +92,11 @@ impl Budget {
     pub fn work(&self) -> Option<u64> {
         self.work
     }
+    /// A budget for a helper thread of this search: the same clock, no work limit of its
+    /// own (its evaluations are added to this one's by the caller).
+    pub fn helper(&self) -> Budget {
+        Budget::new(self.start, self.limit, None)
+    }
     /// Whether the clock cut the search short of its work budget.
     pub fn was_cut(&self) -> bool {
         self.cut.get()
@@ -134,6 +139,16 @@ pub(crate) struct Bin {
     pub members: Vec<Member>,
     pub bounds: Rect,
     idx_of: HashMap<PItemKey, usize>,
+    /// copies of the layout a separation moves items on at once (1: this one alone)
+    pub workers: usize,
+}
+
+/// What one worker's move pass left: the overlapping pairs, their weighted sum, and the
+/// evaluations it spent.
+struct Pass {
+    overlaps: Vec<(usize, usize, f32)>,
+    loss: f32,
+    evals: u64,
 }
 
 /// Snapshot of a [`Bin`].
@@ -460,6 +475,7 @@ impl Bin {
             members: Vec::new(),
             bounds,
             idx_of: HashMap::new(),
+            workers: 1,
         }
     }
 
@@ -652,26 +668,26 @@ impl Bin {
         let mut acc = 0.0;
         let placed = self.layout.placed_items();
         let n = self.members.len();
-        let _ = self.layout.cde().collect_poly_collisions_until(
-            shape,
-            &SkipPk(self.members[i].pk),
-            collector,
-            |e| {
-                match e {
-                    BasicHazardEntity::PlacedItem { pk, .. } => {
-                        let j = self.idx_of[&pk];
-                        let w = gls.map_or(1.0, |g| g.get(i, j));
-                        acc += w * pair_overlap(shape, placed[pk].shape());
-                    }
-                    BasicHazardEntity::Exterior => {
-                        let w = gls.map_or(1.0, |g| g.get(i, n));
-                        acc += w * ext_overlap(shape, self.bounds);
-                    }
-                    _ => {}
+        let mut add = |e: BasicHazardEntity| {
+            match e {
+                BasicHazardEntity::PlacedItem { pk, .. } => {
+                    let j = self.idx_of[&pk];
+                    let w = gls.map_or(1.0, |g| g.get(i, j));
+                    acc += w * pair_overlap(shape, placed[pk].shape());
                 }
-                acc > upper
-            },
-        );
+                BasicHazardEntity::Exterior => {
+                    let w = gls.map_or(1.0, |g| g.get(i, n));
+                    acc += w * ext_overlap(shape, self.bounds);
+                }
+                _ => {}
+            }
+            acc > upper
+        };
+        let skip = SkipPk(self.members[i].pk);
+        let _ = self
+            .layout
+            .cde()
+            .collect_poly_collisions_until(shape, &skip, collector, &mut add);
         acc
     }
 
@@ -842,11 +858,15 @@ impl Bin {
                     .collect();
                 colliding.sort_unstable();
                 colliding.dedup();
-                colliding.shuffle(rng);
-                for &i in &colliding {
-                    self.move_item(i, &gls, rng, budget, &mut collector);
-                }
-                ov = self.overlaps(&mut collector);
+                ov = if self.workers <= 1 {
+                    colliding.shuffle(rng);
+                    for &i in &colliding {
+                        self.move_item(i, &gls, rng, budget, &mut collector);
+                    }
+                    self.overlaps(&mut collector)
+                } else {
+                    self.move_pass_on_workers(&colliding, &gls, rng, budget)
+                };
                 if ov.is_empty() {
                     return 0.0;
                 }
@@ -872,6 +892,70 @@ impl Bin {
             ov = self.overlaps(&mut collector);
         }
         min_loss
+    }
+
+    /// One move pass on [`Bin::workers`] copies of the layout at once (sparrow's
+    /// separator workers): each moves the colliding items in its own random order, and the
+    /// copy with the least weighted overlap is kept (ties: the first, this one), so the
+    /// result does not depend on the threads. Returns its overlaps.
+    fn move_pass_on_workers(
+        &mut self,
+        colliding: &[usize],
+        gls: &Gls,
+        rng: &mut Rng64,
+        budget: &mut Budget,
+    ) -> Vec<(usize, usize, f32)> {
+        let seeds: Vec<u64> = (0..self.workers).map(|_| rng.random()).collect();
+        let n = self.members.len();
+        let run = move |bin: &mut Bin, seed: u64, mut b: Budget| {
+            let mut rng = <Rng64 as rand::SeedableRng>::seed_from_u64(seed);
+            let mut collector = BasicHazardCollector::new();
+            let mut order = colliding.to_vec();
+            order.shuffle(&mut rng);
+            for &i in &order {
+                bin.move_item(i, gls, &mut rng, &mut b, &mut collector);
+            }
+            let overlaps = bin.overlaps(&mut collector);
+            let loss = overlaps
+                .iter()
+                .map(|&(i, j, o)| gls.get(i, j.min(n)) * o)
+                .sum();
+            Pass {
+                overlaps,
+                loss,
+                evals: b.evals,
+            }
+        };
+        let mut copies: Vec<Bin> = (1..self.workers).map(|_| self.clone()).collect();
+        let mut passes: Vec<Pass> = std::thread::scope(|scope| {
+            let handles: Vec<_> = copies
+                .iter_mut()
+                .zip(&seeds[1..])
+                .map(|(bin, &seed)| {
+                    let b = budget.helper();
+                    scope.spawn(move || run(bin, seed, b))
+                })
+                .collect();
+            let mut passes = vec![run(self, seeds[0], budget.helper())];
+            passes.extend(
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
+            );
+            passes
+        });
+        budget.evals += passes.iter().map(|p| p.evals).sum::<u64>();
+        let best = (1..passes.len()).fold(0, |b, k| {
+            if passes[k].loss < passes[b].loss {
+                k
+            } else {
+                b
+            }
+        });
+        if best > 0 {
+            *self = copies.swap_remove(best - 1);
+        }
+        passes.swap_remove(best).overlaps
     }
 
     /// Moves the container's right edge to `x_max`: the items whose bbox centre is right of

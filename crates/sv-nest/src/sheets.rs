@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::engine::{rect, Bin, Budget, Rng64};
 use crate::prepare::{Kind, PartInfo, Prepared, Setup};
 use crate::shape::Rigid;
-use crate::strip::{Progress, DEFAULT_SEARCHES};
+use crate::strip::{Progress, REFERENCE_CORES};
 use crate::{NestError, Part, DEFAULT_FLATTEN_TOLERANCE};
 
 /// Default sheet width (mm).
@@ -283,6 +283,10 @@ pub fn lower_bounds(a: &[f64], cap: f64) -> LowerBounds {
         martello_toth: best,
     }
 }
+
+/// Searches of [`nest_sheets`], side by side (one per core of the reference machine; a
+/// constant, so that the sheets do not depend on the machine).
+const DEFAULT_SEARCHES: usize = REFERENCE_CORES;
 
 /// A used sheet: its stock size (index into [`NestOptions::sheets`]) and its layout.
 type Sheet = (usize, Bin);

@@ -78,9 +78,12 @@ pub struct StripOptions {
     pub clock_decides: bool,
     /// samples per item in the constructive phase
     pub construct_samples: usize,
-    /// independent searches run side by side (seeds derived from `seed`), the best kept;
-    /// a fixed number (not the machine's core count), so the result is the same everywhere
-    pub threads: usize,
+    /// independent searches run side by side (seeds derived from `seed`), the best kept
+    pub searches: usize,
+    /// copies of the layout each search's separator moves items on at once, the best kept
+    /// (sparrow's separator workers; a thread each). Searches and workers are fixed
+    /// numbers, not the machine's core count, so the layout is the same everywhere
+    pub workers: usize,
 }
 
 /// Share of the budget spent exploring (the rest compresses the best layout).
@@ -98,9 +101,11 @@ fn half_normal(rng: &mut Rng64) -> f32 {
 /// Default wall-clock budget of [`StripOptions`].
 pub const DEFAULT_STRIP_SECONDS: u64 = 10;
 
-/// Independent searches of [`nest_strip`] by default: one per core of the reference machine
-/// (2 cores). A constant, so that the layout does not depend on the machine it runs on.
-pub const DEFAULT_SEARCHES: usize = 2;
+/// Threads of a search by default: one per core of the reference machine (2 cores). A
+/// constant, so that the layout does not depend on the machine it runs on. One search on
+/// two workers got 1.3 pp more density than two searches of one worker at the same total
+/// work (6 ESICUP instances x 2 seeds, docs/nesting.md).
+pub const REFERENCE_CORES: usize = 2;
 
 /// Seconds per collision evaluation of one search on the reference machine (2 cores) for
 /// items of `vertices` collision vertices on average: a fixed part and a part per vertex,
@@ -109,9 +114,10 @@ fn strip_seconds_per_evaluation(vertices: f64) -> f64 {
     0.9e-6 + 0.11e-6 * vertices
 }
 
-/// The work budget of each search of [`nest_strip`] when none is given: what one search does
-/// in `time` on the reference machine, scaled with the instance (more vertices per item,
-/// slower evaluations), at a share of the time that leaves room for a busy machine.
+/// The work budget of each search of [`nest_strip`] when none is given: what one search (on
+/// both cores of the reference machine) does in `time`, scaled with the instance (more
+/// vertices per item, slower evaluations), at a share of the time that leaves room for a
+/// busy machine.
 pub fn strip_work_budget(inst: &StripInstance, time: Duration) -> u64 {
     let (n, v) = inst.items.iter().fold((0.0, 0.0), |(n, v), (it, q)| {
         (
@@ -120,7 +126,7 @@ pub fn strip_work_budget(inst: &StripInstance, time: Duration) -> u64 {
         )
     });
     let per_item = if n > 0.0 { v / n } else { 10.0 };
-    (crate::engine::WORK_SHARE_OF_TIME * time.as_secs_f64()
+    (crate::engine::WORK_SHARE_OF_TIME * time.as_secs_f64() * REFERENCE_CORES as f64
         / strip_seconds_per_evaluation(per_item)) as u64
 }
 
@@ -132,7 +138,8 @@ impl Default for StripOptions {
             max_evaluations: None,
             clock_decides: false,
             construct_samples: 400,
-            threads: DEFAULT_SEARCHES,
+            searches: 1,
+            workers: REFERENCE_CORES,
         }
     }
 }
@@ -189,17 +196,17 @@ pub struct StripResult {
 
 /// Strip packing: constructive bottom-left-fill, then repeatedly shrink the strip and separate
 /// the overlapping items (guided local search); the best feasible layout is kept (anytime).
-/// With `threads > 1`, as many independent searches run at once (the first with `seed`, the
-/// others with seeds derived from it), each with the whole budget; the densest wins (ties:
-/// the lowest thread), so a fixed evaluation budget still gives the same layout every run.
+/// With `searches > 1`, as many independent searches run at once (the first with `seed`,
+/// the others with seeds derived from it), each with the whole budget; the densest wins
+/// (ties: the first), so a fixed evaluation budget still gives the same layout every run.
 /// Progress is reported by the first search.
 pub fn nest_strip(
     inst: &StripInstance,
     opts: &StripOptions,
     progress: &mut dyn FnMut(&Progress),
 ) -> StripResult {
-    let threads = opts.threads.max(1);
-    if threads == 1 {
+    let searches = opts.searches.max(1);
+    if searches == 1 {
         let one = StripOptions {
             max_evaluations: work_of(inst, opts),
             ..opts.clone()
@@ -211,7 +218,7 @@ pub fn nest_strip(
         ..opts.clone()
     };
     std::thread::scope(|scope| {
-        let others: Vec<_> = (1..threads as u64)
+        let others: Vec<_> = (1..searches as u64)
             .map(|k| {
                 let o = StripOptions {
                     seed: opts.seed ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15),
@@ -277,6 +284,7 @@ fn nest_strip_one(
         + sep;
     let inset = sep / 2.0;
     let mut bin = Bin::new(rect(inset, inset, total_len, h - inset));
+    bin.workers = opts.workers.max(1);
     for (inst_idx, item) in &copies {
         let x_limit = bin.used_x_max() + item.shape_cd().diameter();
         let dt = bin

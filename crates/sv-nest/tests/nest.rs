@@ -261,7 +261,8 @@ impl Drop for Burners {
     }
 }
 
-/// The work budget decides: the same sheets and strip layout (two searches on two threads)
+/// The work budget decides: the same sheets (two searches on two threads) and strip layout
+/// (one search on two workers)
 /// with the machine quiet and with every core busy, and nothing was cut by the clock.
 #[test]
 fn a_busy_machine_gets_the_same_layout() {
@@ -274,7 +275,8 @@ fn a_busy_machine_gets_the_same_layout() {
     let so = StripOptions {
         time_limit: Duration::from_secs(600),
         max_evaluations: Some(20_000),
-        threads: 2,
+        searches: 1,
+        workers: 2,
         ..StripOptions::default()
     };
     let quiet = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
@@ -294,9 +296,9 @@ fn a_busy_machine_gets_the_same_layout() {
     assert_eq!(quiet_strip.length, busy_strip.length);
     assert!(!quiet_strip.cut_by_time && !busy_strip.cut_by_time);
     assert_eq!(quiet_strip.work_budget, Some(20_000));
-    // both searches spent their work: 2 x the budget, give or take the last move
+    // the search spent its work, give or take the last move pass
     assert!(
-        quiet_strip.evaluations >= 40_000 && quiet_strip.evaluations < 41_000,
+        quiet_strip.evaluations >= 20_000 && quiet_strip.evaluations < 22_000,
         "{}",
         quiet_strip.evaluations
     );
@@ -343,7 +345,8 @@ fn the_time_cap_cuts_the_search_and_says_by_how_much() {
         &StripOptions {
             time_limit: Duration::ZERO,
             max_evaluations: Some(10_000_000),
-            threads: 1,
+            searches: 1,
+            workers: 1,
             ..StripOptions::default()
         },
         &mut |_| {},
@@ -464,13 +467,15 @@ fn esicup_fu_far_above_lbf_with_a_fixed_budget() {
     let inst = StripInstance::read(&dataset("fu")).unwrap();
     let opts = StripOptions {
         time_limit: Duration::from_secs(600),
-        max_evaluations: Some(400_000),
-        threads: 2,
+        max_evaluations: Some(800_000),
+        searches: 1,
+        workers: 2,
         ..StripOptions::default()
     };
     let res = nest_strip(&inst, &opts, &mut |_| {});
     assert_eq!(res.placements.len(), 12);
     // lbf_seed0_density_pct for fu in best_known_spp.csv is 70.32 %; with this fixed budget
-    // the separator reaches 85.8-86.4 % over seeds 0-2
+    // (both workers' evaluations) the search reaches 86.3 % with seed 0 (84.4-87.5 % over
+    // seeds 0-2)
     assert!(res.density * 100.0 > 85.0, "density {}", res.density);
 }
