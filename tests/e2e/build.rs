@@ -376,7 +376,7 @@ fn nest_section_sets_the_sheets_and_bad_values_name_the_key() {
     for (i, sheet) in nest["sheets"].as_array().unwrap().iter().enumerate() {
         let (w, h) = (num(&sheet["width"], "w"), num(&sheet["height"], "h"));
         assert!([(2000.0, 1000.0), (3200.0, 1600.0)].contains(&(w, h)));
-        let stem = format!("sheet-{:02}_{w}x{h}mm_t3mm", i + 1);
+        let stem = format!("sheet-{:02}_{w}x{h}mm_t2.5mm", i + 1);
         assert!(files.contains(&format!("{stem}.dxf")), "{stem}: {files:?}");
     }
     for (toml, key) in [

@@ -95,10 +95,15 @@ fn wrong_format_is_unreadable_input() {
 #[test]
 fn future_version_is_unreadable_input() {
     let dir = solved();
-    rewrite(&dir, |frame| frame["version"] = 2.into());
+    rewrite(&dir, |frame| frame["version"] = 3.into());
     let out = dir.run(&["check", "out/frame.json"]);
     out.expect_code(2);
     assert!(out.one_error_line().contains("frame.json"), "{out:?}");
+    // a version 1 file (the zero-width units) is refused with the reason
+    rewrite(&dir, |frame| frame["version"] = 1.into());
+    let out = dir.run(&["check", "out/frame.json"]);
+    out.expect_code(2);
+    assert!(out.one_error_line().contains("zero-width"), "{out:?}");
 }
 
 #[test]

@@ -294,7 +294,7 @@ fn build_sheets_hold_every_strip_once_inside_the_margin_and_apart() {
     let strips = read_json(&dir.join("out/strips.json"));
     let ids = strip_ids(&strips);
     let kerf = num(&strips["params"]["kerf"], "kerf");
-    let (nest, outline_area) = check_sheets(dir, "out", &ids, "3", kerf);
+    let (nest, outline_area) = check_sheets(dir, "out", &ids, "2.5", kerf);
     let spec = &nest["sheet"];
     let (margin, spacing) = (
         num(&spec["margin"], "margin"),

@@ -39,7 +39,7 @@ fn solve_and_check(dir: &Dir, mesh: &Path, extra: &[&str]) -> Value {
     }
     let frame = read_json(&dir.join("out/frame.json"));
     assert_eq!(frame["format"], "spin-valence/frame");
-    assert_eq!(frame["version"], 1);
+    assert_eq!(frame["version"], 2);
     assert_eq!(frame["length_unit"], "mm");
     frame
 }

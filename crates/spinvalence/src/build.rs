@@ -97,11 +97,13 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
         bail!("invalid unit size {size}: must be a positive length in mm");
     }
     cfg.secondary.check().map_err(|e| anyhow!("{e}"))?;
-    let solve = cfg.primary.to_solve_options()?;
+    let mut solve = cfg.primary.to_solve_options()?;
     let strips = cfg.strips.to_options()?;
     cfg.profile
         .validate()
         .map_err(|e| anyhow!("profile: {e}"))?;
+    // the units deploy as they are cut
+    solve.cut = Some(cfg.profile.cut_widths());
     let nest = cfg.nest.to_options(cfg.profile.kerf)?;
     Ok((
         cfg,
@@ -208,6 +210,45 @@ fn load_layout(path: &Path) -> Result<sv_frame::QuadMesh> {
 
 /// Run `build`. Nothing is written unless every stage succeeded; a hub mesh that misses
 /// some goals is still carried through every stage and written (the outcome names them).
+/// Every hub lap as cut must be long enough to weld (AWS D1.1: at least 5 t and 25 mm).
+/// Nothing is written otherwise: the error names the shortest lap and the levers, with the
+/// values that would give the minimum there (the lap of a square unit grows by
+/// sqrt(2) - 1 = 0.414 mm per mm of unit size and shrinks by 2 sqrt(2) = 2.83 mm per mm the
+/// hub lies deeper inside its tile: docs/geometry.md, "Sizes that can be welded").
+fn weldable(solved: &sv_frame::Solved, min_overlap: f64, cfg: &BuildConfig) -> Result<()> {
+    let overlaps = &solved.evaluation.overlaps;
+    let Some((worst, lap)) = overlaps
+        .iter()
+        .copied()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+    else {
+        return Ok(());
+    };
+    if lap >= min_overlap {
+        return Ok(());
+    }
+    let short = overlaps.iter().filter(|&&o| o < min_overlap).count();
+    let l = &solved.links[worst];
+    let deficit = min_overlap - lap;
+    let p = &cfg.profile;
+    bail!(
+        "hub laps too short to weld: {short} of {} links below the minimum overlap {} mm, \
+         the shortest {} mm between units {} and {}; raise secondary.unit_size to about {:.0} mm, \
+         or make the hub lie {:.1} mm less deep in its tile (profile.leg_width {} or \
+         profile.rim_width {} smaller, down to their minimum web), or lower primary.min_overlap",
+        overlaps.len(),
+        number(min_overlap),
+        number(lap),
+        l.faces[0],
+        l.faces[1],
+        (cfg.secondary.unit_size + deficit / (2f64.sqrt() - 1.0)).ceil(),
+        deficit / (2.0 * 2f64.sqrt()),
+        number(p.leg_width),
+        number(p.rim_width),
+    )
+}
+
 pub fn run(args: &BuildArgs) -> Result<Outcome> {
     let started = Instant::now();
     let (cfg, mut options) = resolve(args)?;
@@ -230,7 +271,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         None => sv_surface::build_secondary(&target, &cfg.secondary, &mut tick),
     };
     bar.finish_and_clear();
-    let (mesh, report) = secondary.map_err(|e| anyhow!("{}: {e}", cfg.target))?;
+    let (mesh, mut report) = secondary.map_err(|e| anyhow!("{}: {e}", cfg.target))?;
     let secondary_s = t0.elapsed().as_secs_f64();
     // the hub mesh is ours: where its planarity goal is unmet the report says so, and the
     // primary solve still deploys it (hubs are best-fit rhombi) instead of refusing
@@ -248,6 +289,16 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     finish(&bar);
     let solved = solved.map_err(|e| anyhow!("{}: primary solve: {e}", cfg.target))?;
     let primary_s = t1.elapsed().as_secs_f64();
+    let min_overlap = cfg.primary.min_overlap(cfg.profile.thickness)?;
+    if let Err(short) = weldable(&solved, min_overlap, &cfg) {
+        // on a hub mesh that met its goals the parameters are to blame: nothing is written;
+        // on one that did not, short laps are one more unmet goal, and everything is written
+        // for the user to look at
+        if report.unmet.is_empty() {
+            bail!("{}: {short}", cfg.target);
+        }
+        report.unmet.push(short.to_string());
+    }
 
     let t2 = Instant::now();
     let mut frame = solved.to_frame_file(&mesh);

@@ -231,6 +231,11 @@ pub struct PrimaryConfig {
     pub tolerance: f64,
     /// Largest face non-planarity accepted from the hub mesh (diagonal distance / mean edge).
     pub planarity_tolerance: f64,
+    /// Shortest hub lap (mm) a weld may have, measured on the hub plates as cut along the
+    /// line between their centres. Default: max(5 t, 25 mm) (AWS D1.1 lap joints). A
+    /// negative value lets hubs miss each other (studies and benchmarks only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_overlap: Option<f64>,
 }
 
 impl Default for PrimaryConfig {
@@ -244,11 +249,22 @@ impl Default for PrimaryConfig {
             max_iterations: d.max_iterations,
             tolerance: d.tolerance,
             planarity_tolerance: d.planarity_tolerance,
+            min_overlap: None,
         }
     }
 }
 
 impl PrimaryConfig {
+    /// The shortest weldable hub lap (mm) for sheet of `thickness`.
+    pub fn min_overlap(&self, thickness: f64) -> Result<f64> {
+        match self.min_overlap {
+            None => Ok((5.0 * thickness).max(25.0)),
+            // below zero the hubs may miss each other: for studies and benchmarks only
+            Some(m) if m.is_finite() => Ok(m),
+            Some(m) => bail!("invalid primary.min_overlap {m}: must be a finite length in mm"),
+        }
+    }
+
     /// The solver options, with the parameters checked (one line each, naming the key).
     pub fn to_solve_options(&self) -> Result<SolveOptions> {
         let spin = self.spin_angle_deg;

@@ -32,6 +32,15 @@ pub fn run(
     params: &ProfileParams,
 ) -> Result<StripsStage> {
     params.validate().map_err(|e| anyhow!("profile: {e}"))?;
+    if let Some(cut) = frame.params.cut {
+        if cut != params.cut_widths() {
+            bail!(
+                "profile: the frame was deployed with the cut {cut:?} but the profile cuts \
+                 {:?}: its parts would not fold to the solved poses",
+                params.cut_widths()
+            );
+        }
+    }
     let strips = sv_strips::unroll(frame, options).map_err(|e| anyhow!("strips: {e}"))?;
     sv_strips::apply_labels(frame, &strips);
     let mut profiles: Vec<StripProfile> = Vec::with_capacity(strips.len());

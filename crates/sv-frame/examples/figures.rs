@@ -637,7 +637,8 @@ fn figure_flat_grid() -> (String, Real, Real, Real) {
     let hubs = hubs_from_mesh(&mesh, alpha).expect("hubs");
     let links = mesh.links();
     let deps = vec![Deployment::new(alpha, 0.0); hubs.len()];
-    let ev = evaluate(&hubs, &links, &deps, 1.0).expect("evaluate");
+    let units = sv_frame::FrameUnits::new(&hubs, 1.0, None).expect("units");
+    let ev = evaluate(&hubs, &links, &deps, &units).expect("evaluate");
     let gap_max = ev.gaps.iter().copied().fold(0.0, Real::max);
     let overlap = ev.overlaps[0];
     // primary corners in world coordinates: R^T (r_i - P) in the hub frame

@@ -106,6 +106,47 @@ fn pt(a: &[Real; 3]) -> Point3 {
     Point3::new(a[0], a[1], a[2])
 }
 
+/// The rigid frame of a rhombic plate from its corners: centroid and the columns `x`
+/// toward corner 0, `y`, `z` its normal; `None` when degenerate.
+fn plate_frame(q: &[Point3; 4]) -> Option<(Point3, Matrix3, Real, Real)> {
+    let c = Point3::from(q.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / 4.0);
+    let (d1, d2) = ((q[0] - q[2]) / 2.0, (q[1] - q[3]) / 2.0);
+    let n = d1.cross(&d2);
+    if n.norm() <= 1e-12 * d1.norm_squared() {
+        return None;
+    }
+    let x = d1.normalize();
+    let z = n.normalize();
+    Some((c, Matrix3::from_columns(&[x, z.cross(&x), z]), d1.norm(), d2.norm()))
+}
+
+/// The legs of a unit as cut, rebuilt from the file alone: the cut of its tile (the primary
+/// rhombus scaled by `e`, [`sv_unit::UnitLayout`]) gives the pins in the flat unit; the hub
+/// pins go with the hub's rhombus, the rim pins with the primary's. Returns the deployed
+/// pins `(hub, rim)` and each leg's flat pin-to-pin length.
+#[allow(clippy::type_complexity)]
+fn legs_as_cut(
+    hub: &[Point3; 4],
+    prim: &[Point3; 4],
+    e: Real,
+    w: &sv_unit::CutWidths,
+) -> Option<(([Point3; 4], [Point3; 4]), [Real; 4])> {
+    let (cp, fp, a, b) = plate_frame(prim)?;
+    let (ch, fh, _, _) = plate_frame(hub)?;
+    let tile = [
+        sv_geom::Point2::new(a * e, 0.0),
+        sv_geom::Point2::new(0.0, b * e),
+        sv_geom::Point2::new(-a * e, 0.0),
+        sv_geom::Point2::new(0.0, -b * e),
+    ];
+    let pins = sv_unit::UnitLayout::new(&tile, w).ok()?.pins();
+    let lift = |p: &sv_geom::Point2| Vector3::new(p.x, p.y, 0.0);
+    let flat = std::array::from_fn(|j| (pins.hub[j] - pins.rim[j]).norm());
+    let on_hub = pins.hub.each_ref().map(|p| ch + fh * lift(p));
+    let on_rim = pins.rim.each_ref().map(|p| cp + fp * lift(p));
+    Some(((on_hub, on_rim), flat))
+}
+
 /// Rigid fit (Kabsch) of `from` onto `to`: largest residual and whether the best
 /// orthogonal map is a proper rotation.
 fn rigid_fit(from: &[Point3; 4], to: &[Point3; 4]) -> (Real, bool) {
@@ -155,6 +196,10 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
     let mut overlaps = Worst::new("hub overlap matches file (mm)", abs);
     let mut coverage = Worst::new("interior edges without a link", 0.0);
     let mut orientation = Worst::new("hub and primary same orientation (0/1)", 0.0);
+    // the unit as cut: legs pin to pin, pins where the cut of the tile puts them
+    let cut = frame.params.cut;
+    let mut pinned = Worst::new("leg pin to pin = its length as cut (mm)", abs);
+    let mut pins_match = Worst::new("pins match the cut of the tile (mm)", abs);
 
     let e = frame.params.expansion;
     let mut expanded: Vec<Option<[Point3; 4]>> = Vec::with_capacity(frame.units.len());
@@ -166,10 +211,32 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
         let (res, proper) = rigid_fit(&prim, &hub);
         congruent.see(res / side, name);
         orientation.see(if proper { 0.0 } else { 1.0 }, name);
-        for i in 0..4 {
-            let s = (prim[i] - prim[(i + 1) % 4]).norm();
-            let leg = (hub[i] - prim[(i + 1) % 4]).norm();
-            legs.see((leg - s).abs() / s, || format!("unit {} leg {i}", u.id));
+        if let Some(w) = &cut {
+            match legs_as_cut(&hub, &prim, e, w) {
+                Some((world, flat)) => {
+                    for j in 0..4 {
+                        let err = ((world.0[j] - world.1[j]).norm() - flat[j]).abs();
+                        pinned.see(err, || format!("unit {} leg {j}", u.id));
+                    }
+                    if let Some(p) = &u.pins {
+                        let off = (0..4)
+                            .map(|j| {
+                                (pt(&p.hub[j]) - world.0[j])
+                                    .norm()
+                                    .max((pt(&p.rim[j]) - world.1[j]).norm())
+                            })
+                            .fold(0.0, Real::max);
+                        pins_match.see(off, name);
+                    }
+                }
+                None => pinned.see(Real::INFINITY, name),
+            }
+        } else {
+            for i in 0..4 {
+                let s = (prim[i] - prim[(i + 1) % 4]).norm();
+                let leg = (hub[i] - prim[(i + 1) % 4]).norm();
+                legs.see((leg - s).abs() / s, || format!("unit {} leg {i}", u.id));
+            }
         }
         let d1 = prim[0] - prim[2];
         let d2 = prim[1] - prim[3];
@@ -180,6 +247,8 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
             name,
         );
         match sv_unit::inverse(&hub, &prim, Real::INFINITY) {
+            // the closed form holds only for the zero-width unit
+            _ if cut.is_some() => {}
             Ok(inv) => {
                 axis.see(inv.residual, name);
                 let d = inv.deployment;
@@ -250,11 +319,13 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
             .iter()
             .fold(Vector3::zeros(), |s, p| s + pt(p).coords)
             / 4.0;
+        // measured on the hub plates as cut where the file has them
+        let plate = |u: &crate::UnitRecord, k: usize| pt(&u.hub_plate.as_ref().unwrap_or(&u.hub)[k]);
         let o = hub_overlap(
             &Point3::from(ca),
-            &pt(&ua.hub[k]),
+            &plate(ua, k),
             &Point3::from(cb),
-            &pt(&ub.hub[m]),
+            &plate(ub, m),
         );
         overlaps.see((o - l.hub_overlap).abs(), at);
     }
@@ -293,21 +364,22 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
     for (v, r) in mesh.conical_residuals() {
         conical.see(r, || format!("vertex {v}"));
     }
-    let rows = [
-        congruent,
-        orientation,
-        legs,
-        rhombic,
-        axis,
-        params,
+    let kinematics = match cut {
+        Some(_) => [pinned, pins_match, rhombic],
+        None => [legs, rhombic, axis],
+    };
+    let rows = [congruent, orientation]
+        .into_iter()
+        .chain(kinematics)
+        .chain(cut.is_none().then_some(params))
+        .chain([
         fitted,
         gaps,
         overlaps,
         coverage,
         planar,
         conical,
-    ]
-    .into_iter()
+    ])
     .map(Worst::row)
     .collect();
     CheckReport { rows }
@@ -330,6 +402,44 @@ mod tests {
         let r = check_frame(&solved_cap(), &CheckOptions::default());
         assert!(r.ok(), "{r:#?}");
         assert_eq!(r.rows.len(), 12);
+    }
+
+    fn solved_cap_as_cut() -> FrameFile {
+        let mesh = QuadMesh::sphere_cap(5, 5, 3000.0, 300.0);
+        let options = SolveOptions {
+            cut: Some(sv_unit::CutWidths {
+                rim: 5.0,
+                slot: 4.5,
+                leg: 18.0,
+                neck: 9.0,
+                joint: 4.5,
+            }),
+            ..SolveOptions::default()
+        };
+        solve(&mesh, &options, &mut |_| {})
+            .unwrap()
+            .to_frame_file(&mesh)
+    }
+
+    #[test]
+    fn frames_as_cut_pass_and_a_pose_moved_2_mm_is_caught_at_its_legs() {
+        let f = solved_cap_as_cut();
+        let r = check_frame(&f, &CheckOptions::default());
+        assert!(r.ok(), "{r:#?}");
+        assert!(r.rows.iter().any(|r| r.name.starts_with("leg pin to pin")));
+        // the primary plate of unit 12 moved 2 mm along its normal: the legs no longer fit
+        let mut moved = f.clone();
+        let p = moved.units[12].primary.map(|c| pt(&c));
+        let n = (p[2] - p[0]).cross(&(p[3] - p[1])).normalize();
+        for c in &mut moved.units[12].primary {
+            for k in 0..3 {
+                c[k] += 2.0 * n[k];
+            }
+        }
+        let r = check_frame(&moved, &CheckOptions::default());
+        let legs = r.rows.iter().find(|r| r.name.starts_with("leg pin to pin")).unwrap();
+        assert!(!legs.ok && legs.worst > 0.5, "{legs:?}");
+        assert!(legs.at.contains(&moved.units[12].id), "{legs:?}");
     }
 
     #[test]

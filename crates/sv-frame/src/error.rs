@@ -76,6 +76,14 @@ pub enum FrameError {
         /// The allowed range.
         why: &'static str,
     },
+    /// A unit's tile is too small for its cut.
+    #[error("unit {unit}: its tile cannot carry the cut: {why}")]
+    Cut {
+        /// Unit (face) index.
+        unit: usize,
+        /// What the cut needs.
+        why: String,
+    },
     /// A unit failed to deploy (should not happen inside the solver's bounds).
     #[error("unit {unit} (face {face}): {cause}")]
     Unit {

@@ -1,18 +1,22 @@
-//! `frame.json` version 1 (model.md), as plain serde data. Extra fields are welcome and
-//! kept optional so that files from other tools still read.
+//! `frame.json` version 2 (docs/frame-format.md), as plain serde data. Version 2 is version
+//! 1 (model.md) measured on the units as cut: `hub_overlap` is the overlap of the hub plates
+//! as cut, and the units deploy on their legs as cut (`params.cut`, per unit `pins`). Extra
+//! fields are welcome and kept optional so that files from other tools still read.
 
 use serde::{Deserialize, Serialize};
 use sv_unit::{AxisCase, Side};
 
 /// The `format` tag of a frame file.
 pub const FRAME_FORMAT: &str = "spin-valence/frame";
+/// The `version` this build writes and reads.
+pub const FRAME_VERSION: u32 = 2;
 
 /// The whole frame file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrameFile {
     /// Always [`FRAME_FORMAT`].
     pub format: String,
-    /// Always 1.
+    /// Always [`FRAME_VERSION`].
     pub version: u32,
     /// Always `"mm"`.
     pub length_unit: String,
@@ -34,8 +38,11 @@ pub struct FrameFile {
 pub struct FrameParams {
     /// Spin angle alpha (rad).
     pub spin_angle: f64,
-    /// Expansion factor e >= 1 of the physical primary tiles.
+    /// Expansion factor e >= 1 of the tiles (the whole cut is made on the expanded tile).
     pub expansion: f64,
+    /// Where the cut goes in every unit (mm); absent for the paper's zero-width unit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cut: Option<sv_unit::CutWidths>,
 }
 
 /// `mesh`: vertices (mm) and quad faces.
@@ -73,6 +80,24 @@ pub struct UnitRecord {
     /// Frame depth `|P|` (mm, extra field).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depth: Option<f64>,
+    /// The hub plate as cut (inside the inner slots), corners in hub corner order (mm).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hub_plate: Option<[[f64; 3]; 4]>,
+    /// The legs' pins in the deployed pose.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pins: Option<LegPins>,
+}
+
+/// Where the four legs of a unit are pinned, deployed (mm): leg `j` is a rigid bar from
+/// `hub[j]` (its neck on the hub plate) to `rim[j]` (its neck on the primary plate).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LegPins {
+    /// Pins on the hub plate.
+    pub hub: [[f64; 3]; 4],
+    /// Pins on the primary plate.
+    pub rim: [[f64; 3]; 4],
+    /// Pin-to-pin length of each leg as cut (flat).
+    pub length: [f64; 4],
 }
 
 /// One link (interior edge).
@@ -84,8 +109,8 @@ pub struct LinkRecord {
     pub edge: [usize; 2],
     /// Closest distance between the facing sides of the expanded primary tiles (mm).
     pub primary_gap: f64,
-    /// How far the two facing hub corners pass each other along the line between the hub
-    /// centres (mm); negative when they do not reach each other.
+    /// How far the two facing corners of the hub plates as cut pass each other along the
+    /// line between the hub centres (mm); negative when they do not reach each other.
     pub hub_overlap: f64,
     /// Side / corner index `k` facing this link in each unit (extra field).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -21,14 +21,17 @@ mod file;
 mod hub;
 mod mesh;
 mod solve;
+mod unit;
 
 pub use check::{
     check_frame, CheckOptions, CheckReport, CheckRow, GOAL_CONICAL_DEG, GOAL_PLANARITY,
 };
 pub use error::{FrameError, MeshError};
 pub use file::{
-    FrameFile, FrameParams, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT,
+    FrameFile, FrameParams, LegPins, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT,
+    FRAME_VERSION,
 };
+pub use unit::FrameUnits;
 pub use hub::{hubs_from_mesh, Hub};
 pub use mesh::{normal_cone, normal_cone_residual, Link, MeshChecks, QuadMesh};
 pub use solve::{

@@ -19,10 +19,12 @@ use faer::sparse::{Pair, SparseColMat, SymbolicSparseColMat};
 use faer::{Conj, Par};
 use serde::{Deserialize, Serialize};
 use sv_geom::{segment_closest, Point3, Real, Vector3};
-use sv_unit::{deploy, primary_in_hub_frame, AxisCase, Deployment, Side};
+use sv_unit::{AxisCase, CutWidths, Deployment, Side};
 
-use crate::file::{FrameParams, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT};
-use crate::{hubs_from_mesh, FrameError, FrameFile, Hub, Link, MeshChecks, QuadMesh};
+use crate::file::{
+    FrameParams, LegPins, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT, FRAME_VERSION,
+};
+use crate::{hubs_from_mesh, FrameError, FrameFile, FrameUnits, Hub, Link, MeshChecks, QuadMesh};
 
 /// Iterations over which [`SolveOptions::tolerance`] measures progress.
 pub const STALL_WINDOW: usize = 5;
@@ -87,6 +89,10 @@ pub struct SolveOptions {
     pub tolerance: Real,
     /// Planarity tolerance for the input mesh (diagonal distance / mean edge).
     pub planarity_tolerance: Real,
+    /// Where the cut goes in every unit: the units deploy as cut, on four legs pinned at
+    /// their necks (docs/geometry.md, "The unit as cut"). `None`: the paper's zero-width
+    /// unit (closed form, legs hinged at the tile corners).
+    pub cut: Option<CutWidths>,
 }
 
 impl Default for SolveOptions {
@@ -100,6 +106,7 @@ impl Default for SolveOptions {
             max_iterations: 60,
             tolerance: 1e-3,
             planarity_tolerance: crate::MeshChecks::DEFAULT_PLANARITY_TOLERANCE,
+            cut: None,
         }
     }
 }
@@ -160,6 +167,8 @@ pub struct Solved {
     pub report: SolveReport,
     /// Options used.
     pub options: SolveOptions,
+    /// The units (as cut or zero-width).
+    pub units: FrameUnits,
 }
 
 /// Bounds kept by the solver: away from the flat state, where `P ~ sqrt(theta)` has
@@ -204,10 +213,11 @@ pub fn solve(
             side: sides[f],
         })
         .collect();
+    let units = FrameUnits::new(&hubs, options.expansion, options.cut.as_ref())?;
     let problem = Problem {
         hubs: &hubs,
         links: &links,
-        expansion: options.expansion,
+        units: &units,
     };
     if options.axis_case.is_none() {
         choose_cases(&problem, &mut deployments)?;
@@ -281,7 +291,7 @@ pub fn solve(
             deployments = best.1;
         }
     }
-    let evaluation = evaluate(&hubs, &links, &deployments, options.expansion)?;
+    let evaluation = evaluate(&hubs, &links, &deployments, &units)?;
     let report = SolveReport {
         gap_sum_start,
         gap_max_start,
@@ -304,6 +314,7 @@ pub fn solve(
         evaluation,
         report,
         options: options.clone(),
+        units,
     })
 }
 
@@ -458,21 +469,7 @@ fn choose_cases(problem: &Problem, deps: &mut [Deployment]) -> Result<(), FrameE
 struct Problem<'a> {
     hubs: &'a [Hub],
     links: &'a [Link],
-    expansion: Real,
-}
-
-/// Expanded primary corners of one unit in world coordinates.
-fn primary_world(
-    hub: &Hub,
-    dep: &Deployment,
-    expansion: Real,
-) -> Result<[Point3; 4], sv_unit::UnitError> {
-    let d = deploy(&hub.rhombus, dep)?;
-    let rt = d.rotation.transpose();
-    let rs = hub.rhombus.corners();
-    Ok(std::array::from_fn(|i| {
-        hub.to_world(&Point3::from(rt * (rs[i] * expansion - d.translation)))
-    }))
+    units: &'a FrameUnits,
 }
 
 impl Problem<'_> {
@@ -488,7 +485,9 @@ impl Problem<'_> {
         deps.iter()
             .enumerate()
             .map(|(f, d)| {
-                primary_world(&self.hubs[f], d, self.expansion).map_err(|e| self.unit_error(f, e))
+                self.units
+                    .primary_world(f, &self.hubs[f], d, self.units.expansion())
+                    .map_err(|e| self.unit_error(f, e))
             })
             .collect()
     }
@@ -514,7 +513,8 @@ impl Problem<'_> {
             .enumerate()
             .map(|(f, d)| {
                 let hub = &p.hubs[f];
-                primary_in_hub_frame(&hub.rhombus, d, p.expansion)
+                p.units
+                    .primary_in_hub_frame(f, hub, d)
                     .map(|j| {
                         (
                             j.corners.map(|q| hub.to_world(&q)),
@@ -596,18 +596,15 @@ fn link_gap(corners: &[[Point3; 4]], l: &Link) -> sv_geom::SegmentClosest {
     )
 }
 
-/// Gaps and hub overlaps of given deployments (one per hub, in face order).
+/// Gaps and hub overlaps of given deployments (one per hub, in face order), measured on
+/// the units' plates (as cut when the units are).
 pub fn evaluate(
     hubs: &[Hub],
     links: &[Link],
     deployments: &[Deployment],
-    expansion: Real,
+    units: &FrameUnits,
 ) -> Result<Evaluation, FrameError> {
-    let problem = Problem {
-        hubs,
-        links,
-        expansion,
-    };
+    let problem = Problem { hubs, links, units };
     let gaps = problem.gaps(deployments)?;
     let overlaps = links
         .iter()
@@ -615,9 +612,9 @@ pub fn evaluate(
             let [f, g] = l.faces;
             hub_overlap(
                 &hubs[f].centre,
-                &hubs[f].corner(l.slots[0]),
+                &units.hub_plate(f, &hubs[f])[l.slots[0]],
                 &hubs[g].centre,
-                &hubs[g].corner(l.slots[1]),
+                &units.hub_plate(g, &hubs[g])[l.slots[1]],
             )
         })
         .collect();
@@ -995,7 +992,7 @@ impl<'a> Lm<'a> {
 }
 
 impl Solved {
-    /// The frame file for this solve (model.md, `frame.json` v1).
+    /// The frame file for this solve (docs/frame-format.md, `frame.json` v2).
     pub fn to_frame_file(&self, mesh: &QuadMesh) -> FrameFile {
         let arr = |p: Point3| [p.x, p.y, p.z];
         let units = self
@@ -1004,9 +1001,11 @@ impl Solved {
             .zip(&self.deployments)
             .enumerate()
             .map(|(f, (hub, dep))| {
-                let primary =
-                    primary_world(hub, dep, 1.0).expect("solved deployments are feasible");
-                let depth = deploy(&hub.rhombus, dep).map(|d| d.translation.norm()).ok();
+                let primary = self
+                    .units
+                    .primary_world(f, hub, dep, 1.0)
+                    .expect("solved deployments are feasible");
+                let depth = self.units.pose(f, hub, dep).map(|(_, p)| p.norm()).ok();
                 UnitRecord {
                     id: format!("U{f:04}"),
                     face: f,
@@ -1015,6 +1014,12 @@ impl Solved {
                     phi: dep.phi,
                     hub: hub.corners().map(arr),
                     primary: primary.map(arr),
+                    hub_plate: Some(self.units.hub_plate(f, hub).map(arr)),
+                    pins: self.units.pins_world(f, hub, dep).ok().map(|(h, r)| LegPins {
+                        hub: h.map(arr),
+                        rim: r.map(arr),
+                        length: self.units.legs(f, hub).length,
+                    }),
                     axis_case: Some(dep.case),
                     side: Some(dep.side),
                     depth,
@@ -1035,11 +1040,12 @@ impl Solved {
             .collect();
         FrameFile {
             format: FRAME_FORMAT.into(),
-            version: 1,
+            version: FRAME_VERSION,
             length_unit: "mm".into(),
             params: FrameParams {
                 spin_angle: self.options.spin_angle,
                 expansion: self.options.expansion,
+                cut: self.options.cut,
             },
             mesh: MeshData {
                 vertices: mesh.vertices.iter().map(|p| arr(*p)).collect(),

@@ -1,4 +1,4 @@
-//! `frame.json` version 1 (model.md): writer and checking reader.
+//! `frame.json` version 2 (docs/frame-format.md): writer and checking reader.
 
 use serde::Deserialize;
 use serde_json::Value;
@@ -9,7 +9,7 @@ use sv_frame::{
 use crate::IoError;
 
 /// The `version` this build reads and writes.
-pub const FRAME_VERSION: u32 = 1;
+pub use sv_frame::FRAME_VERSION;
 /// The `length_unit` of every frame file.
 pub const FRAME_LENGTH_UNIT: &str = "mm";
 
@@ -157,6 +157,16 @@ fn check_header(root: &serde_json::Map<String, Value>, name: &str) -> Result<(),
     expect_str("format", FRAME_FORMAT)?;
     match root.get("version") {
         Some(Value::Number(n)) if n.as_u64() == Some(u64::from(FRAME_VERSION)) => {}
+        Some(Value::Number(n)) if n.as_u64() == Some(1) => {
+            return Err(IoError::value(
+                name,
+                "version",
+                format!(
+                    "version 1 describes the paper's zero-width units, not the parts as cut; \
+                     rebuild the frame with this build (it reads version {FRAME_VERSION})"
+                ),
+            ))
+        }
         Some(other) => {
             return Err(IoError::value(
                 name,
@@ -457,14 +467,17 @@ pub(crate) mod tests {
             axis_case: None,
             side: None,
             depth: Some(50.0),
+            hub_plate: None,
+            pins: None,
         };
         FrameFile {
             format: FRAME_FORMAT.into(),
-            version: 1,
+            version: FRAME_VERSION,
             length_unit: "mm".into(),
             params: FrameParams {
                 spin_angle: std::f64::consts::FRAC_PI_4,
                 expansion: 1.0,
+                cut: None,
             },
             mesh: MeshData {
                 vertices: vec![
@@ -522,7 +535,7 @@ pub(crate) mod tests {
         ];
         let at: Vec<usize> = order.iter().map(|k| text.find(k).unwrap()).collect();
         assert!(at.windows(2).all(|w| w[0] < w[1]), "{at:?}");
-        assert!(text.starts_with("{\n  \"format\": \"spin-valence/frame\",\n  \"version\": 1,\n"));
+        assert!(text.starts_with("{\n  \"format\": \"spin-valence/frame\",\n  \"version\": 2,\n"));
     }
 
     #[test]
@@ -552,8 +565,8 @@ pub(crate) mod tests {
             "frame.json: format: expected \"spin-valence/frame\", got the string \"other\"",
         );
         check(
-            &edited(|v| v["version"] = 2.into()),
-            "frame.json: version: unsupported version 2 (this build reads version 1)",
+            &edited(|v| v["version"] = 3.into()),
+            "frame.json: version: unsupported version 3 (this build reads version 2)",
         );
         check(
             &edited(|v| v["length_unit"] = "in".into()),

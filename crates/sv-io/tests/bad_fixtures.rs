@@ -79,13 +79,14 @@ fn truncated_binary_stl_fixture() {
 
 #[test]
 fn bad_frame_json_fixtures() {
-    let (name, bytes) = fixture!("frame_version_2.json");
+    let (name, bytes) = fixture!("frame_version_1.json");
     let e = frame_from_json(std::str::from_utf8(bytes).unwrap(), name)
         .unwrap_err()
         .to_string();
     assert_eq!(
         e,
-        "frame_version_2.json: version: unsupported version 2 (this build reads version 1)"
+        "frame_version_1.json: version: version 1 describes the paper's zero-width units, not \
+         the parts as cut; rebuild the frame with this build (it reads version 2)"
     );
     let (name, bytes) = fixture!("frame_syntax.json");
     let e = frame_from_json(std::str::from_utf8(bytes).unwrap(), name)

@@ -339,7 +339,12 @@ fn plots_section(input: &ReportInput<'_>) -> String {
         .into_iter()
         .map(|(_, r)| r.to_degrees())
         .collect();
-    let quads: Vec<[[f64; 3]; 4]> = frame.units.iter().map(|u| u.hub).collect();
+    // the hub plates as cut where the frame has them
+    let quads: Vec<[[f64; 3]; 4]> = frame
+        .units
+        .iter()
+        .map(|u| u.hub_plate.unwrap_or(u.hub))
+        .collect();
     let labels: Vec<&str> = frame.units.iter().map(|u| u.id.as_str()).collect();
     let theta: Vec<f64> = frame.units.iter().map(|u| u.theta.to_degrees()).collect();
     let depth: Vec<f64> = frame
@@ -556,7 +561,7 @@ fn view_data(input: &ReportInput<'_>) -> Value {
                 "id": u.id, "strip": u.strip,
                 "theta": finite(u.theta), "phi": finite(u.phi),
                 "depth": u.depth.map_or(Value::Null, |d| round(d, 0.01)),
-                "hub": pts(&u.hub), "primary": pts(&u.primary),
+                "hub": pts(&u.hub_plate.unwrap_or(u.hub)), "primary": pts(&u.primary),
             })
         })
         .collect();

@@ -134,8 +134,9 @@ fn with_nesting_every_strip_has_its_sheet_and_position() {
     assert!(!html.contains("id=\"no-nesting\""));
     let s = Summary::of(&input);
     assert_eq!(s.sheets, Some(2));
-    // the steel to buy: two 3000 x 1500 x 3 mm sheets at 7850 kg/m^3
-    let mass = 2.0 * 3.0 * 1.5 * 0.003 * 7850.0;
+    // the steel to buy: two 3000 x 1500 mm sheets of the profile's thickness at 7850 kg/m^3
+    let t = ProfileParams::default().thickness / 1000.0;
+    let mass = 2.0 * 3.0 * 1.5 * t * 7850.0;
     let value: f64 = html
         .split("data-key=\"sheet_mass_kg\" data-value=\"")
         .nth(1)

@@ -197,8 +197,8 @@ pub struct UnitTarget {
 }
 
 /// Every unit's target, in file order: the one place the streamer takes target corners and
-/// poses from a frame. Today these are the frame's `hub` and `primary` corners; when
-/// `frame.json` carries the plates as cut (issue 14), this function switches to them.
+/// poses from a frame: the hub plate as cut (`hub_plate`, frame.json v2; the `hub` rhombus
+/// of older files) and the `primary` plate.
 /// An error names the unit whose tile is not finite or degenerate.
 pub fn unit_targets(frame: &FrameFile) -> Result<Vec<UnitTarget>, String> {
     let ids = unit_ids(frame);
@@ -207,15 +207,12 @@ pub fn unit_targets(frame: &FrameFile) -> Result<Vec<UnitTarget>, String> {
         .iter()
         .enumerate()
         .map(|(i, u)| {
-            let finite = u
-                .hub
-                .iter()
-                .chain(&u.primary)
-                .flatten()
-                .all(|v| v.is_finite());
-            match (finite, tile_pose(&u.hub), tile_pose(&u.primary)) {
+            // the hub plate as cut where the frame has it (same pose, the plate's outline)
+            let hub = u.hub_plate.unwrap_or(u.hub);
+            let finite = hub.iter().chain(&u.primary).flatten().all(|v| v.is_finite());
+            match (finite, tile_pose(&hub), tile_pose(&u.primary)) {
                 (true, Some(hub_pose), Some(primary_pose)) => Ok(UnitTarget {
-                    hub: u.hub,
+                    hub,
                     primary: u.primary,
                     hub_pose,
                     primary_pose,
@@ -227,8 +224,8 @@ pub fn unit_targets(frame: &FrameFile) -> Result<Vec<UnitTarget>, String> {
 }
 
 /// The design hub overlap (mm) of every link, keyed by its unit indices (smaller first): the
-/// one place the streamer takes the expected overlap from. Today the link's `hub_overlap`;
-/// when `frame.json` carries the plates as cut (issue 14), their physical overlap.
+/// one place the streamer takes the expected overlap from: the link's `hub_overlap`, which
+/// frame.json v2 measures on the hub plates as cut.
 pub fn design_overlaps(frame: &FrameFile) -> Result<HashMap<(usize, usize), f64>, String> {
     let n = frame.units.len();
     let mut out = HashMap::new();

@@ -17,8 +17,8 @@
 //! use sv_strips::{check_profile, profile_strip, unit_labels, unroll, ProfileParams, StripOptions};
 //! let params = ProfileParams::default();
 //! let mesh = QuadMesh::grid(4, 2, 300.0);
-//! // the hub cut in the sheet has the model size when e follows the leg width (fig. 11)
-//! let options = SolveOptions { expansion: params.expansion_for(150.0), ..Default::default() };
+//! // the units deploy as they are cut
+//! let options = SolveOptions { cut: Some(params.cut_widths()), ..Default::default() };
 //! let frame = solve(&mesh, &options, &mut |_| {}).unwrap().to_frame_file(&mesh);
 //! let strips = unroll(&frame, &StripOptions::default()).unwrap();
 //! assert_eq!(strips.len(), 2);

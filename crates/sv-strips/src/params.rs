@@ -101,9 +101,10 @@ impl StripOptions {
 /// units of a strip are separated by a joint slot `neck_length` wide, crossed by one
 /// bridge (`neck_width` x `neck_length`) at their pin.
 ///
-/// Defaults (3 mm mild steel, air plasma): t = 3, kerf 1.3, leg 20, rim 12, neck 10 x 4.5,
-/// slot 4.5 (1.5 t, ends full rounds of diameter 4.5 >= max(kerf + 0.5, t)), fillet 2,
-/// lead-in room 2.6 (2 kerf).
+/// Defaults (2.5 mm mild steel, air plasma; every width the least its rule allows, so the hub
+/// plates as cut lap by the weld minimum at 300 mm units): t = 2.5, kerf 1.3, leg 15,
+/// rim 3.75, neck 7.5 x 3.75, slot 3.75 (1.5 t, ends full rounds of diameter 3.75 >=
+/// max(kerf + 0.5, t)), fillet 1.5, lead-in room 2.6 (2 kerf).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct ProfileParams {
@@ -132,14 +133,14 @@ pub struct ProfileParams {
 impl Default for ProfileParams {
     fn default() -> Self {
         Self {
-            thickness: 3.0,
+            thickness: 2.5,
             kerf: 1.3,
-            leg_width: 20.0,
-            rim_width: 12.0,
-            neck_width: 10.0,
-            neck_length: 4.5,
-            slot_width: 4.5,
-            fillet_radius: 2.0,
+            leg_width: 15.0,
+            rim_width: 3.75,
+            neck_width: 7.5,
+            neck_length: 3.75,
+            slot_width: 3.75,
+            fillet_radius: 1.5,
             lead_in_room: 2.6,
         }
     }
@@ -159,18 +160,22 @@ impl ProfileParams {
         (self.kerf + 0.5).max(self.thickness)
     }
 
+    /// Where the cut goes inside a unit's tile: the widths the unit as cut is made of
+    /// (sv_unit::UnitLayout), read by the frame solve and the cut profile alike.
+    pub fn cut_widths(&self) -> sv_unit::CutWidths {
+        sv_unit::CutWidths {
+            rim: self.rim_width,
+            slot: self.slot_width,
+            leg: self.leg_width,
+            neck: self.neck_width,
+            joint: self.neck_length,
+        }
+    }
+
     /// How far the hub lies inside the expanded primary tile (mm): half the joint slot,
     /// rim, two slots and the leg.
     pub fn hub_inset(&self) -> f64 {
-        self.neck_length / 2.0 + self.rim_width + 2.0 * self.slot_width + self.leg_width
-    }
-
-    /// The expansion factor e (paper fig. 11) for a model primary tile of inradius
-    /// `tile_inradius` (mm): the physical primary tile is the model tile grown by the hub
-    /// inset, so the hub cut in the sheet has the model size. A rhombus is tangential, so
-    /// growing it by `d` on every side is scaling it by `1 + d / inradius` about its centre.
-    pub fn expansion_for(&self, tile_inradius: f64) -> f64 {
-        1.0 + self.hub_inset() / tile_inradius
+        self.cut_widths().hub_inset()
     }
 
     /// Check every parameter; the error names the first bad one.
@@ -319,7 +324,13 @@ mod tests {
     fn defaults_are_valid_and_match_the_rules() {
         let p = ProfileParams::default();
         p.validate().unwrap();
-        assert_eq!(p.min_web(), 4.5);
+        assert_eq!(p.min_web(), 3.75);
+        // every width the least its rule allows (docs/fabrication.md)
+        assert_eq!(p.slot_width, p.min_web());
+        assert_eq!(p.rim_width, p.min_web());
+        assert_eq!(p.neck_length, p.min_web());
+        assert_eq!(p.neck_width, 3.0 * p.thickness);
+        assert_eq!(p.leg_width, 2.0 * p.neck_width);
         assert!(p.slot_width >= p.min_slot_end_diameter());
         assert!(p.neck_width <= p.leg_width / 2.0 && p.neck_width >= 3.0 * p.thickness);
         assert!(StripOptions::default().max_length == 2980.0);

@@ -5,6 +5,7 @@ use cavalier_contours::polyline::{
 };
 use serde::{Deserialize, Serialize};
 use sv_geom::{Contour, Point2, Vector2};
+use sv_unit::UnitLayout;
 
 use crate::plane::cross;
 use crate::{FlatStrip, ProfileParams, StripsError};
@@ -45,33 +46,7 @@ fn p2a(p: Point2) -> [f64; 2] {
     [p.x, p.y]
 }
 
-/// Intersection of the lines `p + s d` and `q + t e`.
-fn meet(p: Point2, d: Vector2, q: Point2, e: Vector2) -> Option<Point2> {
-    let den = cross(&d, &e);
-    if den.abs() < 1e-12 {
-        return None;
-    }
-    Some(p + d * (cross(&(q - p), &e) / den))
-}
-
-/// The counter-clockwise convex quad `q` with every side moved inward by `delta`.
-fn inset(q: &[Point2; 4], delta: f64) -> Option<[Point2; 4]> {
-    let d: [Vector2; 4] = std::array::from_fn(|i| (q[(i + 1) % 4] - q[i]).normalize());
-    let base: [Point2; 4] = std::array::from_fn(|i| q[i] + Vector2::new(-d[i].y, d[i].x) * delta);
-    let mut out = [Point2::origin(); 4];
-    for i in 0..4 {
-        let h = (i + 3) % 4;
-        out[i] = meet(base[h], d[h], base[i], d[i])?;
-    }
-    // still counter-clockwise and convex with the same side directions
-    for i in 0..4 {
-        let e = out[(i + 1) % 4] - out[i];
-        if e.dot(&d[i]) <= 1e-9 {
-            return None;
-        }
-    }
-    Some(out)
-}
+use sv_unit::inset;
 
 fn closed(points: &[Point2]) -> Polyline<f64> {
     let mut p = Polyline::with_capacity(points.len(), true);
@@ -136,62 +111,35 @@ fn unit_error(strip: &str, unit: usize, why: String) -> StripsError {
     }
 }
 
-/// The four hook slots of a unit whose plate (tile minus half the joint slot) is `q`.
+/// The four hook slots of a unit whose tile is `tile`, where sv_unit::UnitLayout puts them.
 fn unit_cuts(
     strip: &str,
     unit: usize,
     label: String,
-    q: &[Point2; 4],
+    tile: &[Point2; 4],
     p: &ProfileParams,
 ) -> Result<UnitCut, StripsError> {
-    let s = p.slot_width;
-    let err = |why: &str| unit_error(strip, unit, why.to_string());
-    let oq = inset(q, p.rim_width + s / 2.0).ok_or_else(|| err("tile too small for the rim"))?;
-    let iq = inset(q, p.rim_width + 1.5 * s + p.leg_width)
-        .ok_or_else(|| err("tile too small for rim, legs and slots"))?;
-    let hub = inset(q, p.rim_width + 2.0 * s + p.leg_width)
-        .ok_or_else(|| err("tile too small: no hub left inside the legs"))?;
-    let d: [Vector2; 4] = std::array::from_fn(|i| (q[(i + 1) % 4] - q[i]).normalize());
-    let nrm = |i: usize| Vector2::new(-d[i % 4].y, d[i % 4].x);
-    let sin_at = |i: usize| cross(&d[(i + 3) % 4], &d[i % 4]).abs();
-    let neck = p.neck_width + s;
-    let mut slots = Vec::with_capacity(4);
-    let mut folds = Vec::with_capacity(8);
-    for i in 0..4 {
-        let (i1, i2) = ((i + 1) % 4, (i + 2) % 4);
-        let h = iq[i];
-        let a = h + d[i] * (neck / sin_at(i));
-        let x = meet(iq[i], d[i], oq[i1], d[i1]).ok_or_else(|| err("parallel sides"))?;
-        let c = oq[i2];
-        let x_next = meet(iq[i1], d[i1], oq[i2], d[i2]).ok_or_else(|| err("parallel sides"))?;
-        let run = (x_next - c).dot(&d[i2]) - neck / sin_at(i2);
-        if (x - a).dot(&d[i]) < s || run < s / 2.0 {
-            return Err(err(&format!(
-                "tile too small for the hook slot {i} with neck width {}",
-                p.neck_width
-            )));
-        }
-        let end = c + d[i2] * run;
-        slots.push(slot(&[a, x, c, end], s)?);
-        // hub neck: from the previous slot's edge to this slot's round end
-        let prev = (i + 3) % 4;
-        let foot = h + d[prev] * (a - h).dot(&d[prev]) + nrm(prev) * (s / 2.0);
-        let tip = a - d[i] * (s / 2.0);
-        folds.push(shorten(foot, tip, 0.75));
-        // rim neck: from this slot's end to the next slot's edge along I_{i+1}
-        let tip = end + d[i2] * (s / 2.0);
-        let foot = x_next + d[i1] * (end - x_next).dot(&d[i1]) - nrm(i1) * (s / 2.0);
-        folds.push(shorten(tip, foot, 0.75));
-    }
+    let layout = UnitLayout::new(tile, &p.cut_widths()).map_err(|e| unit_error(strip, unit, e.0))?;
+    let slots = layout
+        .slot_paths
+        .iter()
+        .map(|c| slot(c, p.slot_width))
+        .collect::<Result<Vec<_>, _>>()?;
+    let folds = (0..4)
+        .flat_map(|j| [layout.hub_necks[j], layout.rim_necks[(j + 1) % 4]])
+        .map(|[a, b]| shorten(a, b, 0.75))
+        .collect();
+    let hub = layout.hub;
+    let d0 = (hub[1] - hub[0]).normalize();
     let centre = Point2::from(hub.iter().fold(Vector2::zeros(), |acc, v| acc + v.coords) / 4.0);
     let inradius = (0..4)
-        .map(|i| cross(&d[i], &(centre - hub[i])))
+        .map(|i| cross(&(hub[(i + 1) % 4] - hub[i]).normalize(), &(centre - hub[i])))
         .fold(f64::INFINITY, f64::min);
     let height = (inradius * 2.0 / (0.9 * label.len().max(1) as f64 + 1.0)).clamp(3.0, 25.0);
     let label = Label {
         text: label,
         at: p2a(centre),
-        angle: d[0].y.atan2(d[0].x),
+        angle: d0.y.atan2(d0.x),
         height,
     };
     Ok(UnitCut {
@@ -256,7 +204,7 @@ pub fn profile_strip(
         let q = inset(tile, half)
             .ok_or_else(|| unit_error(&strip.id, u, "tile smaller than the joint slot".into()))?;
         let label = labels.get(j).cloned().unwrap_or_default();
-        let cut = unit_cuts(&strip.id, u, label, &q, params)?;
+        let cut = unit_cuts(&strip.id, u, label, tile, params)?;
         for sl in &cut.slots {
             cuts.push(Contour::from_pline(sl));
             cut_units.push(u);

@@ -333,8 +333,8 @@ fn profiles_pass_the_design_rules() {
         assert_eq!(json["format"], "spin-valence/strips");
         assert_eq!(json["version"], 1);
         assert_eq!(json["length_unit"], "mm");
-        assert_eq!(json["params"]["thickness"], 3.0);
-        assert_eq!(json["params"]["min_web"], 4.5);
+        assert_eq!(json["params"]["thickness"], params.thickness);
+        assert_eq!(json["params"]["min_web"], params.min_web());
         let s0 = &json["strips"][0];
         assert_eq!(s0["id"], "A01");
         assert_eq!(s0["flat"][0]["primary"].as_array().unwrap().len(), 4);

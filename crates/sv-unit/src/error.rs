@@ -41,4 +41,13 @@ pub enum UnitError {
     /// The hub and primary tile given to [`crate::inverse`] are not a valid pair.
     #[error("hub and primary tile are not a deployed rhombic unit: {0}")]
     NotAUnit(String),
+    /// The four legs of a cut are in a singular position (their constraints dependent).
+    #[error("the legs as cut are in a singular position: the hub's pose is not determined")]
+    LegsSingular,
+    /// No pose near the requested one holds every leg of the cut.
+    #[error("the legs as cut cannot reach this pose: a leg stays {error:.3e} mm off its length")]
+    LegsUnreachable {
+        /// Largest leg error left (mm).
+        error: f64,
+    },
 }

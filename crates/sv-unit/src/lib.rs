@@ -1,4 +1,8 @@
-//! Closed-form kinematics of one rhombic Spin-Valence unit (paper sec. 3.2).
+//! One Spin-Valence unit: the closed-form kinematics of paper sec. 3.2 (the zero-width limit)
+//! and the unit as cut ([`UnitLayout`]: where the slots run and the legs are pinned;
+//! [`Linkage`]: its deployment on four rigid legs).
+//!
+//! The closed form:
 //!
 //! A unit is a rhombic primary tile with half-diagonals `r1 = (a, 0, 0)` and
 //! `r2 = (0, b, 0)` in its own frame (centroid at the origin, normal `+z`), and a hub
@@ -28,10 +32,14 @@
 //! assert!((d.translation.norm() - depth).abs() < 1e-9);
 //! ```
 
+mod cut;
 mod error;
 mod kinematics;
+mod linkage;
 
+pub use cut::{inset, CutError, CutWidths, Pins, UnitLayout};
 pub use error::UnitError;
+pub use linkage::{Linkage, LEG_TOLERANCE};
 pub use kinematics::{
     axis, deploy, depth_squared, inverse, primary_in_hub_frame, rotation, AxisCase, CornerJacobian,
     Deployed, Deployment, Inverse, Rhombus, Side,

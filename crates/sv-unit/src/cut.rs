@@ -1,0 +1,267 @@
+//! The unit as cut: where the hook slots run, where the legs fold (necks) and where the
+//! legs are pinned, on one flat unit plate (docs/geometry.md, "The unit as cut").
+//!
+//! From the plate outline inward: the rim, an outer slot track, the leg, an inner slot track
+//! and the hub. Hook slot `i` starts on the inner track of side `i` a neck width past
+//! inner corner `i`, runs along side `i`, crosses to the outer track at corner `i + 1`, runs
+//! along side `i + 1`, turns corner `i + 2` and stops a neck width before slot `i + 1`
+//! crosses there. So leg `j` (between the tracks along side `j`) joins the hub at the neck
+//! near corner `j` and the rim at the neck near corner `j + 1`. In the limit of zero widths
+//! those necks are the tile corners `j` and `j + 1`: the paper's leg from `s_j` to `r_{j+1}`.
+//!
+//! This is the one place that says where the cut goes: the cut profile (sv-strips) draws
+//! its slots along [`UnitLayout::slot_paths`], the frame solve pins its legs at
+//! [`UnitLayout::pins`].
+
+use sv_geom::{Point2, Real, Vector2};
+
+/// The widths that place the cut inside a unit plate (mm).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CutWidths {
+    /// Rim: between the outer slot and the plate outline.
+    pub rim: Real,
+    /// Slot width.
+    pub slot: Real,
+    /// Leg: between the two slots.
+    pub leg: Real,
+    /// Neck: the reduced section where a leg folds.
+    pub neck: Real,
+    /// The joint slot between consecutive units of a strip: every plate is its tile
+    /// inset by half of it.
+    pub joint: Real,
+}
+
+impl CutWidths {
+    /// All widths zero: the paper's idealised unit (legs hinged at the tile corners).
+    pub const ZERO: CutWidths = CutWidths {
+        rim: 0.0,
+        slot: 0.0,
+        leg: 0.0,
+        neck: 0.0,
+        joint: 0.0,
+    };
+
+    /// How far the hub plate lies inside the tile on every side (mm).
+    pub fn hub_inset(&self) -> Real {
+        self.joint / 2.0 + self.rim + 2.0 * self.slot + self.leg
+    }
+
+    /// Every width multiplied by `k` (the zero-width limit is `k -> 0`).
+    pub fn scaled(&self, k: Real) -> Self {
+        Self {
+            rim: self.rim * k,
+            slot: self.slot * k,
+            leg: self.leg * k,
+            neck: self.neck * k,
+            joint: self.joint * k,
+        }
+    }
+}
+
+/// The cut of one unit plate, in the plate's flat frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UnitLayout {
+    /// The plate: the tile inset by half the joint slot (counter-clockwise).
+    pub plate: [Point2; 4],
+    /// The hub plate, inside the inner slot track (counter-clockwise).
+    pub hub: [Point2; 4],
+    /// Centre line of hook slot `i`: start, the crossing at corner `i + 1`, corner `i + 2`,
+    /// end.
+    pub slot_paths: [[Point2; 4]; 4],
+    /// Fold line across the neck where leg `j` joins the hub (slot edge to slot edge).
+    pub hub_necks: [[Point2; 2]; 4],
+    /// Fold line across the neck where leg `j` joins the rim.
+    pub rim_necks: [[Point2; 2]; 4],
+}
+
+/// Why a tile cannot carry the cut.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CutError(pub String);
+
+impl std::fmt::Display for CutError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+fn cross(a: &Vector2, b: &Vector2) -> Real {
+    a.x * b.y - a.y * b.x
+}
+
+/// Intersection of the lines `p + s d` and `q + t e`.
+fn meet(p: Point2, d: Vector2, q: Point2, e: Vector2) -> Option<Point2> {
+    let den = cross(&d, &e);
+    if den.abs() < 1e-12 {
+        return None;
+    }
+    Some(p + d * (cross(&(q - p), &e) / den))
+}
+
+/// The counter-clockwise convex quad `q` with every side moved inward by `delta`; `None`
+/// when that turns a side around.
+pub fn inset(q: &[Point2; 4], delta: Real) -> Option<[Point2; 4]> {
+    let d: [Vector2; 4] = std::array::from_fn(|i| (q[(i + 1) % 4] - q[i]).normalize());
+    let base: [Point2; 4] = std::array::from_fn(|i| q[i] + Vector2::new(-d[i].y, d[i].x) * delta);
+    let mut out = [Point2::origin(); 4];
+    for i in 0..4 {
+        let h = (i + 3) % 4;
+        out[i] = meet(base[h], d[h], base[i], d[i])?;
+    }
+    for i in 0..4 {
+        if (out[(i + 1) % 4] - out[i]).dot(&d[i]) <= 1e-9 {
+            return None;
+        }
+    }
+    Some(out)
+}
+
+impl UnitLayout {
+    /// The cut of the unit whose tile (counter-clockwise, convex) is `tile`.
+    pub fn new(tile: &[Point2; 4], w: &CutWidths) -> Result<Self, CutError> {
+        let err = |why: String| Err(CutError(why));
+        let Some(q) = inset(tile, w.joint / 2.0) else {
+            return err("tile smaller than the joint slot".into());
+        };
+        let s = w.slot;
+        let Some(oq) = inset(&q, w.rim + s / 2.0) else {
+            return err("tile too small for the rim".into());
+        };
+        let Some(iq) = inset(&q, w.rim + 1.5 * s + w.leg) else {
+            return err("tile too small for rim, legs and slots".into());
+        };
+        let Some(hub) = inset(&q, w.rim + 2.0 * s + w.leg) else {
+            return err("tile too small: no hub left inside the legs".into());
+        };
+        let d: [Vector2; 4] = std::array::from_fn(|i| (q[(i + 1) % 4] - q[i]).normalize());
+        let nrm = |i: usize| Vector2::new(-d[i % 4].y, d[i % 4].x);
+        let sin_at = |i: usize| cross(&d[(i + 3) % 4], &d[i % 4]).abs();
+        let neck = w.neck + s;
+        let mut slot_paths = [[Point2::origin(); 4]; 4];
+        let mut hub_necks = [[Point2::origin(); 2]; 4];
+        let mut rim_necks = [[Point2::origin(); 2]; 4];
+        for i in 0..4 {
+            let (i1, i2, prev) = ((i + 1) % 4, (i + 2) % 4, (i + 3) % 4);
+            let a = iq[i] + d[i] * (neck / sin_at(i));
+            let parallel = || CutError("tile has parallel adjacent sides".into());
+            let x = meet(iq[i], d[i], oq[i1], d[i1]).ok_or_else(parallel)?;
+            let c = oq[i2];
+            let x_next = meet(iq[i1], d[i1], oq[i2], d[i2]).ok_or_else(parallel)?;
+            let run = (x_next - c).dot(&d[i2]) - neck / sin_at(i2);
+            if (x - a).dot(&d[i]) < s || run < s / 2.0 {
+                return err(format!(
+                    "tile too small for hook slot {i} with neck width {}",
+                    w.neck
+                ));
+            }
+            let end = c + d[i2] * run;
+            slot_paths[i] = [a, x, c, end];
+            // leg i joins the hub between the previous slot's edge and this slot's start
+            let foot = iq[i] + d[prev] * (a - iq[i]).dot(&d[prev]) + nrm(prev) * (s / 2.0);
+            hub_necks[i] = [foot, a - d[i] * (s / 2.0)];
+            // leg i1 joins the rim between this slot's end and the next slot's crossing
+            let tip = end + d[i2] * (s / 2.0);
+            let foot = x_next + d[i1] * (end - x_next).dot(&d[i1]) - nrm(i1) * (s / 2.0);
+            rim_necks[i1] = [tip, foot];
+        }
+        Ok(Self {
+            plate: q,
+            hub,
+            slot_paths,
+            hub_necks,
+            rim_necks,
+        })
+    }
+
+    /// The pins of the four legs: leg `j` is a rigid bar from `hub[j]` (a point of the hub
+    /// plate) to `rim[j]` (a point of the primary plate), each the centre of its neck's
+    /// fold line, where the neck's section is narrowest.
+    pub fn pins(&self) -> Pins {
+        let mid = |n: &[Point2; 2]| Point2::from((n[0].coords + n[1].coords) / 2.0);
+        Pins {
+            hub: self.hub_necks.each_ref().map(mid),
+            rim: self.rim_necks.each_ref().map(mid),
+        }
+    }
+}
+
+/// Where the legs are pinned, in the flat unit's frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pins {
+    /// Leg `j`'s pin on the hub plate.
+    pub hub: [Point2; 4],
+    /// Leg `j`'s pin on the primary plate (rim).
+    pub rim: [Point2; 4],
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(h: Real) -> [Point2; 4] {
+        [
+            Point2::new(h, 0.0),
+            Point2::new(0.0, h),
+            Point2::new(-h, 0.0),
+            Point2::new(0.0, -h),
+        ]
+    }
+
+    const DEFAULT: CutWidths = CutWidths {
+        rim: 5.0,
+        slot: 4.5,
+        leg: 18.0,
+        neck: 9.0,
+        joint: 4.5,
+    };
+
+    #[test]
+    fn legs_pin_near_the_corners_they_replace_and_the_hub_is_inset() {
+        let tile = square(212.0);
+        let l = UnitLayout::new(&tile, &DEFAULT).unwrap();
+        let p = l.pins();
+        for j in 0..4 {
+            // hub pin near corner j, rim pin near corner j + 1: closer to them than to any
+            // other corner
+            let near = |x: Point2| (0..4).min_by(|&a, &b| {
+                (x - tile[a]).norm().total_cmp(&(x - tile[b]).norm())
+            });
+            assert_eq!(near(p.hub[j]), Some(j));
+            assert_eq!(near(p.rim[j]), Some((j + 1) % 4));
+            // both inside the plate, the hub pin on the hub's side of the inner track
+            assert!(p.hub[j].coords.norm() < p.rim[j].coords.norm());
+        }
+        // the hub plate lies hub_inset inside the tile on every side
+        let inset_here = (tile[0].coords.norm() - l.hub[0].coords.norm()) / 2f64.sqrt();
+        assert!((inset_here - DEFAULT.hub_inset()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn pins_tend_to_the_tile_corners_as_the_widths_vanish() {
+        let tile = [
+            Point2::new(230.0, 0.0),
+            Point2::new(0.0, 190.0),
+            Point2::new(-230.0, 0.0),
+            Point2::new(0.0, -190.0),
+        ];
+        let mut last = Real::INFINITY;
+        for k in [1.0, 0.1, 0.01, 0.001] {
+            let p = UnitLayout::new(&tile, &DEFAULT.scaled(k)).unwrap().pins();
+            let worst = (0..4)
+                .map(|j| {
+                    (p.hub[j] - tile[j])
+                        .norm()
+                        .max((p.rim[j] - tile[(j + 1) % 4]).norm())
+                })
+                .fold(0.0, Real::max);
+            assert!(worst < last, "k = {k}: {worst} not below {last}");
+            last = worst;
+        }
+        assert!(last < 0.2, "{last}");
+    }
+
+    #[test]
+    fn a_tile_too_small_is_named() {
+        let e = UnitLayout::new(&square(40.0), &DEFAULT).unwrap_err();
+        assert!(e.0.contains("too small"), "{e}");
+    }
+}

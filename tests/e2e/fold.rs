@@ -1,0 +1,135 @@
+//! The parts as cut fold to the frame: our own fold check (`fold_check.py`: numpy and ezdxf,
+//! nothing from the project) finds every neck in the strip DXFs, pins the legs there, moves
+//! the pins with the hub and primary plates of `frame.json` and measures every leg and hub lap.
+
+use std::fs;
+use std::process::Command;
+
+use serde_json::Value;
+
+use crate::build::default_build;
+use crate::ezdxf::venv_python;
+use crate::util::{read_json, Dir};
+
+/// Run the fold check on `dir/out`; `(exit code, stdout, figures)`.
+fn fold_check(dir: &Dir) -> (i32, String, Value) {
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/e2e/fold_check.py");
+    let json = dir.join("fold.json");
+    let out = Command::new(venv_python())
+        .arg(script)
+        .arg(dir.join("out"))
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .expect("run fold_check.py");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    let code = out.status.code().unwrap_or(-1);
+    assert!(
+        json.exists(),
+        "fold_check.py wrote no figures (exit {code}): {stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (code, stdout, read_json(&json))
+}
+
+/// A copy of the default build's `out/` (frame, strips and their DXFs) in a fresh directory.
+fn copy_of_default_build() -> Dir {
+    let (built, out) = default_build();
+    out.expect_code(0);
+    let dir = Dir::new();
+    fs::create_dir_all(dir.join("out/strips")).unwrap();
+    for f in ["frame.json", "strips.json"] {
+        fs::copy(built.join(&format!("out/{f}")), dir.join(&format!("out/{f}"))).unwrap();
+    }
+    for f in built.entries("out/strips") {
+        fs::copy(
+            built.join(&format!("out/strips/{f}")),
+            dir.join(&format!("out/strips/{f}")),
+        )
+        .unwrap();
+    }
+    dir
+}
+
+fn f(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} missing in {v}"))
+}
+
+#[test]
+fn the_default_build_folds_from_its_dxf_as_our_own_code_measures_it() {
+    let dir = copy_of_default_build();
+    let frame = read_json(&dir.join("out/frame.json"));
+    let units = frame["units"].as_array().unwrap().len();
+    let links = frame["links"].as_array().unwrap().len();
+    let (code, stdout, fig) = fold_check(&dir);
+    assert_eq!(code, 0, "{stdout}");
+    // every leg of every unit, every hub lap
+    assert_eq!(fig["legs_checked"], 4 * units, "{fig}");
+    assert_eq!(fig["laps_checked"], links, "{fig}");
+    // the legs as cut reach the solved poses
+    assert!(f(&fig, "leg_error_max") <= 0.5, "{fig}");
+    // every hub lap can be welded (the default minimum, max(5 t, 25 mm) at t = 2.5)
+    assert!(f(&fig, "lap_min") >= 25.0, "{fig}");
+    // and frame.json reports the laps the parts show
+    assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{fig}");
+}
+
+#[test]
+fn a_pose_moved_2_mm_or_a_neck_moved_2_mm_fails_both_checks_naming_the_unit() {
+    // the primary plate of one unit moved 2 mm along its normal
+    let dir = copy_of_default_build();
+    let path = dir.join("out/frame.json");
+    let mut frame: Value = read_json(&path);
+    let unit = &mut frame["units"][40];
+    let id = unit["id"].as_str().unwrap().to_string();
+    let p: Vec<[f64; 3]> = (0..4)
+        .map(|i| std::array::from_fn(|k| unit["primary"][i][k].as_f64().unwrap()))
+        .collect();
+    let (d1, d2) = (
+        [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]],
+        [p[3][0] - p[1][0], p[3][1] - p[1][1], p[3][2] - p[1][2]],
+    );
+    let n = [
+        d1[1] * d2[2] - d1[2] * d2[1],
+        d1[2] * d2[0] - d1[0] * d2[2],
+        d1[0] * d2[1] - d1[1] * d2[0],
+    ];
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    for (i, c) in p.iter().enumerate() {
+        for k in 0..3 {
+            unit["primary"][i][k] = (c[k] + 2.0 * n[k] / len).into();
+        }
+    }
+    fs::write(&path, serde_json::to_string_pretty(&frame).unwrap()).unwrap();
+    let (code, stdout, _) = fold_check(&dir);
+    assert_eq!(code, 1, "{stdout}");
+    assert!(stdout.contains(&id), "{id}: {stdout}");
+    let checked = dir.run(&["check", "out/frame.json"]);
+    checked.expect_code(1);
+    assert!(checked.stdout.contains(&id), "{id}: {checked:?}");
+
+    // one hook slot of a unit moved 2 mm in its strip's DXF: its necks move with it
+    let dir = copy_of_default_build();
+    let strips = read_json(&dir.join("out/strips.json"));
+    let strip = strips["strips"][3]["id"].as_str().unwrap().to_string();
+    let dxf = dir.join(&format!("out/strips/{strip}.dxf"));
+    let moved = Command::new(venv_python())
+        .arg("-c")
+        .arg(
+            "import ezdxf, sys\n\
+             d = ezdxf.readfile(sys.argv[1])\n\
+             e = [e for e in d.modelspace() if e.dxf.layer == 'INSIDE'][0]\n\
+             e.set_points([(x + 2.0, y, s, t, b) for x, y, s, t, b in e.get_points()])\n\
+             d.saveas(sys.argv[1])\n",
+        )
+        .arg(&dxf)
+        .status()
+        .unwrap();
+    assert!(moved.success());
+    let (code, stdout, fig) = fold_check(&dir);
+    assert_eq!(code, 1, "{stdout}");
+    assert!(f(&fig, "leg_error_max") > 0.5, "{fig}");
+    assert!(stdout.contains(&format!("{strip}-")), "{strip}: {stdout}");
+}

@@ -1,0 +1,678 @@
+#!/usr/bin/env python3
+"""Independent fold check of a spinvalence build, "as a fabricator would do it".
+
+Reads only the build's output files (frame.json, strips.json, strips/<id>.dxf)
+and uses its own geometry (numpy + ezdxf); nothing from the project is imported.
+
+  python3 fold_check.py DIR [--min-overlap 25] [--json OUT] [--step 0.05]
+
+Checks
+  1. legs: for every leg j of every unit the pins are found in the DXF (centre of
+     the narrowest web between the two slots bounding the leg: hub neck = inner
+     web near corner j, rim neck = outer web near corner j+1).  Hub pins are
+     moved to 3D with the rigid motion flat tile -> frame.json `hub`, rim pins
+     with flat tile -> frame.json `primary`.  | |H-R| - |h-r| | <= 0.5 mm.
+     Distance of our pins to frame.json `pins` must be <= 0.5 mm too.
+  2. hub laps: hub plate rebuilt from the DXF slots, its corner facing the link
+     moved to 3D, lap = (tip_f - tip_g) . e >= --min-overlap and within 0.1 mm
+     of links[].hub_overlap.
+  3. (informational) largest primary gap and count of links whose facing
+     primary sides pass through each other.
+
+Exit status: 0 all pass, 1 some check failed, 2 input files unreadable.
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+# one BLAS thread: the distance matrices here are small, threads only thrash
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_v, "1")
+
+try:
+    import numpy as np  # noqa: E402
+except ImportError:  # pragma: no cover
+    print("fold_check: numpy is required", file=sys.stderr)
+    sys.exit(2)
+
+LEG_TOL = 0.5
+PIN_TOL = 0.5
+LAP_CLAIM_TOL = 0.1
+KABSCH_TOL = 1e-3
+
+
+# ----------------------------------------------------------------- geometry
+
+def flatten_lwpolyline(pts, step):
+    """pts: (n,3) array x,y,bulge of a closed polyline -> (m,2) dense points
+    (closed; last point not repeated), and list of straight segments."""
+    n = len(pts)
+    out = []
+    lines = []
+    prims = []
+    for i in range(n):
+        p = pts[i, :2]
+        q = pts[(i + 1) % n, :2]
+        b = pts[i, 2]
+        d = q - p
+        c = math.hypot(d[0], d[1])
+        if c < 1e-12:
+            continue
+        if abs(b) < 1e-9:
+            k = max(1, int(math.ceil(c / step)))
+            t = np.arange(k)[:, None] / k
+            out.append(p + t * d)
+            lines.append((p.copy(), q.copy()))
+            prims.append(("L", p.copy(), q.copy()))
+        else:
+            theta = 4.0 * math.atan(b)
+            m = 0.5 * (p + q)
+            nrm = np.array([-d[1], d[0]]) / c
+            ctr = m + nrm * (0.5 * c) * (1.0 - b * b) / (2.0 * b)
+            r = math.hypot(*(p - ctr))
+            a0 = math.atan2(p[1] - ctr[1], p[0] - ctr[0])
+            k = max(1, int(math.ceil(r * abs(theta) / step)))
+            a = a0 + theta * np.arange(k) / k
+            out.append(ctr + r * np.stack([np.cos(a), np.sin(a)], 1))
+            prims.append(("A", ctr, r, a0, theta, p.copy(), q.copy()))
+    return np.concatenate(out, 0), lines, prims
+
+
+def prim_len(pr):
+    if pr[0] == "L":
+        return float(np.linalg.norm(pr[2] - pr[1]))
+    return abs(pr[2] * pr[4])
+
+
+def prim_eval(pr, u):
+    """Points at parameters u in [0, 1] along a primitive."""
+    u = np.asarray(u, float)[:, None]
+    if pr[0] == "L":
+        return pr[1] + u * (pr[2] - pr[1])
+    a = pr[3] + pr[4] * u[:, 0]
+    return pr[1] + pr[2] * np.stack([np.cos(a), np.sin(a)], 1)
+
+
+def prim_param(pr, x):
+    """Parameter in [0, 1] of the point of the primitive nearest x."""
+    if pr[0] == "L":
+        d = pr[2] - pr[1]
+        return min(1.0, max(0.0, float(np.dot(x - pr[1], d) / np.dot(d, d))))
+    v = x - pr[1]
+    ang = math.atan2(v[1], v[0]) - pr[3]
+    th = pr[4]
+    rel = (ang % (2 * math.pi)) if th > 0 else ((-ang) % (2 * math.pi))
+    u = rel / abs(th)
+    if u <= 1.0:
+        return u
+    # outside the sweep: the nearer end
+    return 0.0 if np.dot(x - pr[5], x - pr[5]) <= np.dot(x - pr[6], x - pr[6]) else 1.0
+
+
+def sample_near(prims, x, rad, step):
+    """Points of the contour within about rad of x, spaced step (along each primitive)."""
+    out = []
+    for pr in prims:
+        L = prim_len(pr)
+        if L < 1e-12:
+            continue
+        u0 = prim_param(pr, x)
+        y = prim_eval(pr, [u0])[0]
+        if np.linalg.norm(y - x) > rad + 1e-12 and np.linalg.norm(y - x) > 1.0:
+            continue
+        du = rad / L
+        lo, hi = max(0.0, u0 - du), min(1.0, u0 + du)
+        k = max(2, int(math.ceil((hi - lo) * L / step)) + 1)
+        out.append(prim_eval(pr, np.linspace(lo, hi, k)))
+    return np.concatenate(out, 0) if out else None
+
+
+def polish(prims_a, prims_b, pa, pb):
+    """Refine a closest pair of the two exact contours (lines and arcs) by
+    resampling ever finer around the current pair (+-0.2 mm at 5 um spacing,
+    then down to 0.6 nm spacing): the narrowest-web point to ~1e-6 mm."""
+    for rad, step in ((0.2, 5e-3), (0.01, 2.5e-4), (5e-4, 1.25e-5), (2.5e-5, 6e-7)):
+        A = sample_near(prims_a, pa, rad, step)
+        B = sample_near(prims_b, pb, rad, step)
+        if A is None or B is None:
+            break
+        o = 0.5 * (pa + pb)
+        A0, B0 = A - o, B - o
+        d2 = ((A0[:, None, :] - B0[None, :, :]) ** 2).sum(-1)
+        k = int(np.argmin(d2))
+        u, v = divmod(k, len(B))
+        if d2[u, v] <= float(np.dot(pa - pb, pa - pb)) + 1e-15:
+            pa, pb = A[u], B[v]
+    return pa, pb
+
+
+def kabsch_2d_to_3d(P2, Q3):
+    """Rigid motion (R 3x3, t) with R @ [x,y,0] + t ~= Q.  Returns R, t, rms residual."""
+    P = np.hstack([np.asarray(P2, float), np.zeros((len(P2), 1))])
+    Q = np.asarray(Q3, float)
+    pc, qc = P.mean(0), Q.mean(0)
+    H = (P - pc).T @ (Q - qc)
+    U, S, Vt = np.linalg.svd(H)
+    dd = np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0
+    D = np.diag([1.0, 1.0, dd])
+    R = Vt.T @ D @ U.T
+    t = qc - R @ pc
+    res = np.sqrt(np.mean(np.sum((P @ R.T + t - Q) ** 2, 1)))
+    return R, t, res
+
+
+def apply(Rt, p2):
+    R, t = Rt[0], Rt[1]
+    p = np.asarray(p2, float)
+    return R[:, :2] @ p + t
+
+
+def seg_seg(p1, q1, p2, q2):
+    """Closest points of 3D segments p1q1 and p2q2 (Ericson)."""
+    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
+    a, e, f = np.dot(d1, d1), np.dot(d2, d2), np.dot(d2, r)
+    c, b = np.dot(d1, r), np.dot(d1, d2)
+    den = a * e - b * b
+    s = min(1.0, max(0.0, (b * f - c * e) / den)) if den > 1e-12 else 0.0
+    t = (b * s + f) / e
+    if t < 0.0:
+        t, s = 0.0, min(1.0, max(0.0, -c / a))
+    elif t > 1.0:
+        t, s = 1.0, min(1.0, max(0.0, (b - c) / a))
+    return p1 + s * d1, p2 + t * d2
+
+
+def seg_pierces_quad(b0, b1, Q):
+    """Does segment b0b1 cross the plane of planar quad Q inside Q?"""
+    c = Q.mean(0)
+    n = np.cross(Q[2] - Q[0], Q[3] - Q[1])
+    n /= np.linalg.norm(n)
+    s0, s1 = np.dot(b0 - c, n), np.dot(b1 - c, n)
+    if s0 * s1 > 0 or s0 == s1:
+        return False
+    x = b0 + (s0 / (s0 - s1)) * (b1 - b0)
+    u = Q[1] - Q[0]
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    q2 = np.array([[np.dot(p - c, u), np.dot(p - c, v)] for p in Q])
+    return point_in_convex(q2, np.array([np.dot(x - c, u), np.dot(x - c, v)]))
+
+
+def point_in_convex(poly, p):
+    s = None
+    n = len(poly)
+    for i in range(n):
+        a, b = poly[i], poly[(i + 1) % n]
+        cr = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+        if abs(cr) < 1e-12:
+            continue
+        if s is None:
+            s = cr > 0
+        elif (cr > 0) != s:
+            return False
+    return True
+
+
+def line_intersect(a, b):
+    """a, b: (p, q) segments -> intersection of their infinite lines."""
+    p, r = a[0], a[1] - a[0]
+    q, s = b[0], b[1] - b[0]
+    den = r[0] * s[1] - r[1] * s[0]
+    if abs(den) < 1e-12:
+        return None
+    w = q - p
+    t = (w[0] * s[1] - w[1] * s[0]) / den
+    return p + t * r
+
+
+def cyclic_runs(mask):
+    """Index runs (lists) of True in a cyclic boolean array."""
+    n = len(mask)
+    if not mask.any():
+        return []
+    if mask.all():
+        return [list(range(n))]
+    start = int(np.argmin(mask))  # a False position
+    runs, cur = [], []
+    for k in range(1, n + 1):
+        i = (start + k) % n
+        if mask[i]:
+            cur.append(i)
+        elif cur:
+            runs.append(cur)
+            cur = []
+    if cur:
+        runs.append(cur)
+    return runs
+
+
+def near_prims(prims, x, rad):
+    out = []
+    for pr in prims:
+        if pr[0] == "L":
+            lo = np.minimum(pr[1], pr[2]); hi = np.maximum(pr[1], pr[2])
+        else:
+            lo = pr[1] - pr[2]; hi = pr[1] + pr[2]
+        if np.all(x >= lo - rad) and np.all(x <= hi + rad):
+            out.append(pr)
+    return out or prims
+
+
+def sqdist(A, B):
+    d = (A * A).sum(1)[:, None] + (B * B).sum(1)[None, :] - 2.0 * (A @ B.T)
+    return np.maximum(d, 0.0)
+
+
+def necks_between(fa, fb, K, thr, prims_a=None, prims_b=None):
+    """Narrow webs between dense closed contours fa, fb (coarse stride K).
+    Returns list of (width, midpoint(2,), pa, pb)."""
+    o = fa[0]
+    ca, cb = fa[::K] - o, fb[::K] - o
+    D2 = sqdist(ca, cb)
+    near = D2.min(1) < thr * thr
+    res = []
+    na, nb = len(fa), len(fb)
+    W = 3 * K
+    for run in cyclic_runs(near):
+        sub = D2[run]
+        k = int(np.argmin(sub))
+        i0, j0 = run[k // sub.shape[1]], k % sub.shape[1]
+        ia = np.arange(i0 * K - W, i0 * K + W + 1) % na
+        ib = np.arange(j0 * K - W, j0 * K + W + 1) % nb
+        A, B = fa[ia], fb[ib]
+        d2 = sqdist(A - fa[ia[0]], B - fa[ia[0]])
+        k = int(np.argmin(d2))
+        u, v = divmod(k, len(B))
+        pa, pb = A[u], B[v]
+        if prims_a is not None:
+            pa, pb = polish(near_prims(prims_a, pa, 5.0), near_prims(prims_b, pb, 5.0), pa, pb)
+        res.append((float(np.linalg.norm(pa - pb)), 0.5 * (pa + pb), pa, pb))
+    # merge duplicates (same web seen from two runs)
+    merged = []
+    for r in sorted(res, key=lambda r: r[0]):
+        if all(np.linalg.norm(r[1] - m[1]) > 5.0 for m in merged):
+            merged.append(r)
+    return merged
+
+
+# ----------------------------------------------------------------- main
+
+class InputError(Exception):
+    pass
+
+
+def load_inputs(d):
+    try:
+        with open(os.path.join(d, "frame.json")) as f:
+            frame = json.load(f)
+        with open(os.path.join(d, "strips.json")) as f:
+            strips = json.load(f)
+    except Exception as e:  # noqa
+        raise InputError("cannot read frame.json/strips.json: %s" % e)
+    if frame.get("format") != "spin-valence/frame" or frame.get("version") != 2:
+        raise InputError("frame.json is not spin-valence/frame version 2 (%r %r)"
+                         % (frame.get("format"), frame.get("version")))
+    return frame, strips
+
+
+def read_slots(path):
+    """Closed LWPOLYLINEs on layer INSIDE as (n,3) arrays x, y, bulge."""
+    try:
+        import ezdxf
+    except ImportError:
+        raise InputError("ezdxf is required to read %s" % path)
+    slots = []
+    try:
+        from ezdxf.addons import iterdxf  # fast single pass, modelspace only
+        with open(path, "rb") as fh:
+            for e in iterdxf.single_pass_modelspace(fh, types=["LWPOLYLINE"]):
+                if e.dxf.layer.upper() == "INSIDE":
+                    slots.append(np.array(list(e.get_points("xyb")), float))
+        return slots
+    except Exception:  # noqa  -- fall back to the full reader
+        slots = []
+    try:
+        doc = ezdxf.readfile(path)
+    except Exception as e:  # noqa
+        raise InputError("cannot read %s: %s" % (path, e))
+    for e in doc.modelspace():
+        if e.dxftype() == "LWPOLYLINE" and e.dxf.layer.upper() == "INSIDE":
+            slots.append(np.array(list(e.get_points("xyb")), float))
+    return slots
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("dir", help="build directory (frame.json, strips.json, strips/*.dxf)")
+    ap.add_argument("--min-overlap", type=float, default=25.0, help="minimum hub lap, mm (25)")
+    ap.add_argument("--json", metavar="OUT", help="write the figures as JSON")
+    ap.add_argument("--step", type=float, default=0.05, help="arc/line flattening step, mm (0.05)")
+    a = ap.parse_args(argv)
+
+    try:
+        frame, strips = load_inputs(a.dir)
+        units = frame["units"]
+        links = frame["links"]
+        cut = frame["params"]["cut"]
+        neck_w, leg_w = float(cut["neck"]), float(cut["leg"])
+    except InputError as e:
+        print("fold_check: %s" % e, file=sys.stderr)
+        return 2
+    except (KeyError, TypeError) as e:
+        print("fold_check: malformed frame.json: %r" % e, file=sys.stderr)
+        return 2
+
+    step = a.step
+    K = max(1, int(round(3.0 / step)))       # coarse stride: ~3 mm
+    thr = 0.5 * (neck_w + leg_w)               # web narrower than this = neck
+    nu = len(units)
+    uid = [u["id"] for u in units]
+
+    flat_tile = [None] * nu
+    hub_mot = [None] * nu
+    pri_mot = [None] * nu
+    hub_pins = [None] * nu   # flat, 4x2
+    rim_pins = [None] * nu
+    plate_flat = [None] * nu  # hub plate corners, flat
+    problems = []            # (check, where, message)
+    kabsch_max = 0.0
+    inner_violations = 0
+
+    try:
+        strip_list = strips["strips"]
+    except (KeyError, TypeError) as e:
+        print("fold_check: malformed strips.json: %r" % e, file=sys.stderr)
+        return 2
+
+    for st in strip_list:
+        path = os.path.join(a.dir, "strips", "%s.dxf" % st["id"])
+        try:
+            slots = read_slots(path)
+        except InputError as e:
+            print("fold_check: %s" % e, file=sys.stderr)
+            return 2
+        tiles = [(fl["unit"], np.array(fl["primary"], float)) for fl in st["flat"]]
+        per_unit = {ui: [] for ui, _ in tiles}
+        for s in slots:
+            c = s[:, :2].mean(0)
+            owner = [ui for ui, T in tiles if point_in_convex(T, c)]
+            if len(owner) != 1:
+                problems.append(("slots", st["id"], "slot at (%.1f, %.1f) in %d tiles"
+                                 % (c[0], c[1], len(owner))))
+                continue
+            per_unit[owner[0]].append(s)
+        for ui, T in tiles:
+            u = units[ui]
+            flat_tile[ui] = T
+            hub_mot[ui] = kabsch_2d_to_3d(T, u["hub"])
+            pri_mot[ui] = kabsch_2d_to_3d(T, u["primary"])
+            kabsch_max = max(kabsch_max, hub_mot[ui][2], pri_mot[ui][2])
+            sl = per_unit[ui]
+            if len(sl) != 4:
+                problems.append(("legs", uid[ui], "%d slots in the DXF (want 4)" % len(sl)))
+                continue
+            dense, lines, prims = [], [], []
+            for s in sl:
+                fd, ln, pr = flatten_lwpolyline(s, step)
+                dense.append(fd)
+                lines.append(ln)
+                prims.append(pr)
+            ctr = T.mean(0)
+            # ---- necks: pairs of slots with two narrow webs
+            cand = []
+            for i in range(4):
+                for k in range(i + 1, 4):
+                    nk = necks_between(dense[i], dense[k], K, thr, prims[i], prims[k])
+                    if len(nk) == 2:
+                        cand.append(nk)
+                    elif len(nk) != 0:
+                        problems.append(("legs", uid[ui], "slots %d/%d: %d necks" % (i, k, len(nk))))
+            hp = [None] * 4
+            rp = [None] * 4
+            for nk in cand:
+                best = None
+                for j in range(4):
+                    for h, r in ((nk[0], nk[1]), (nk[1], nk[0])):
+                        cost = np.linalg.norm(h[1] - T[j]) + np.linalg.norm(r[1] - T[(j + 1) % 4])
+                        if best is None or cost < best[0]:
+                            best = (cost, j, h, r)
+                _, j, h, r = best
+                if hp[j] is not None:
+                    problems.append(("legs", uid[ui], "two slot pairs claim leg %d" % j))
+                hp[j], rp[j] = h[1], r[1]
+                if np.linalg.norm(h[1] - ctr) >= np.linalg.norm(r[1] - ctr):
+                    inner_violations += 1
+                    problems.append(("legs", uid[ui], "leg %d hub neck not inner" % j))
+            if any(x is None for x in hp):
+                problems.append(("legs", uid[ui], "found %d of 4 legs" % sum(x is not None for x in hp)))
+            else:
+                hub_pins[ui] = np.array(hp)
+                rim_pins[ui] = np.array(rp)
+            # ---- hub plate: quad of the four inner slot edges.
+            # The hub plate's corners are not cut as corners (the legs' hub
+            # necks join there), so each corner is derived as the intersection
+            # of the lines of the two adjacent inner slot edges: per slot the
+            # long straight edge nearest the tile centre.
+            side_len = np.linalg.norm(T[1] - T[0])
+            side_n = []
+            for j in range(4):
+                dj = T[(j + 1) % 4] - T[j]
+                nn = np.array([dj[1], -dj[0]]) / np.linalg.norm(dj)
+                if np.dot(nn, 0.5 * (T[j] + T[(j + 1) % 4]) - ctr) < 0:
+                    nn = -nn
+                side_n.append(nn)
+            edge_of_side = [None] * 4
+            for ln in lines:
+                best = None
+                for p, q in ln:
+                    if np.linalg.norm(q - p) < 0.25 * side_len:
+                        continue
+                    dv = (q - p) / np.linalg.norm(q - p)
+                    dist = abs((ctr - p)[0] * dv[1] - (ctr - p)[1] * dv[0])
+                    if best is None or dist < best[0]:
+                        best = (dist, p, q)
+                if best is None:
+                    continue
+                _, p, q = best
+                j = int(np.argmax([np.dot(0.5 * (p + q) - ctr, nn) for nn in side_n]))
+                edge_of_side[j] = (p, q)
+            if any(e is None for e in edge_of_side):
+                problems.append(("laps", uid[ui], "hub plate edges not found"))
+            else:
+                pc = [line_intersect(edge_of_side[(j - 1) % 4], edge_of_side[j]) for j in range(4)]
+                if any(c is None for c in pc):
+                    problems.append(("laps", uid[ui], "hub plate edges parallel"))
+                else:
+                    plate_flat[ui] = np.array(pc)
+
+    # ---------------------------------------------------------- check 1
+    legs_checked = 0
+    leg_err = (0.0, None)
+    pin_off = (0.0, None)
+    leg_fail = []
+    pin_fail = []
+    tool_leg_err = 0.0   # leg test with frame.json pins (informational)
+    tool_len_err = 0.0   # |H-R| (ours) vs frame.json pins.length (informational)
+    for ui in range(nu):
+        if flat_tile[ui] is None:
+            problems.append(("legs", uid[ui], "unit not in any strip"))
+            continue
+        if hub_pins[ui] is None:
+            continue
+        u = units[ui]
+        fp = u.get("pins") or {}
+        for j in range(4):
+            h, r = hub_pins[ui][j], rim_pins[ui][j]
+            H, R = apply(hub_mot[ui], h), apply(pri_mot[ui], r)
+            err = abs(np.linalg.norm(H - R) - np.linalg.norm(h - r))
+            legs_checked += 1
+            where = "%s leg %d" % (uid[ui], j)
+            if leg_err[1] is None or err > leg_err[0]:
+                leg_err = (err, where)
+            if err > LEG_TOL:
+                leg_fail.append(where)
+            try:
+                off = max(np.linalg.norm(H - np.array(fp["hub"][j], float)),
+                          np.linalg.norm(R - np.array(fp["rim"][j], float)))
+            except (KeyError, IndexError, TypeError):
+                off = float("inf")
+            if pin_off[1] is None or off > pin_off[0]:
+                pin_off = (off, where)
+            if off > PIN_TOL:
+                pin_fail.append(where)
+            # informational: the same leg test with the tool's own pins
+            try:
+                Ht, Rt = np.array(fp["hub"][j], float), np.array(fp["rim"][j], float)
+                ht = (hub_mot[ui][0].T @ (Ht - hub_mot[ui][1]))[:2]
+                rt = (pri_mot[ui][0].T @ (Rt - pri_mot[ui][1]))[:2]
+                tool_leg_err = max(tool_leg_err, abs(np.linalg.norm(Ht - Rt) - np.linalg.norm(ht - rt)))
+                if "length" in fp:
+                    tool_len_err = max(tool_len_err, abs(np.linalg.norm(H - R) - float(fp["length"][j])))
+            except (KeyError, IndexError, TypeError, ValueError):
+                pass
+
+    # ---------------------------------------------------------- check 2
+    hub_ctr = [np.mean(np.array(u["hub"], float), 0) for u in units]
+    plate3 = [None if plate_flat[ui] is None else
+              np.array([apply(hub_mot[ui], p) for p in plate_flat[ui]]) for ui in range(nu)]
+    plate_dev = (0.0, None)
+    for ui in range(nu):
+        if plate3[ui] is not None and "hub_plate" in units[ui]:
+            dv = float(np.max(np.linalg.norm(plate3[ui] - np.array(units[ui]["hub_plate"], float), axis=1)))
+            if plate_dev[1] is None or dv > plate_dev[0]:
+                plate_dev = (dv, uid[ui])
+    laps_checked = 0
+    lap_min = (float("inf"), None)
+    lap_max = -float("inf")
+    lap_claim = (0.0, None)
+    lap_fail, claim_fail = [], []
+    slot_mismatch = 0
+    gap_max = (-float("inf"), None)
+    crossings = []
+    gap_claim_err = 0.0
+    for li, lk in enumerate(links):
+        f, g = lk["units"]
+        where = "%s~%s" % (uid[f], uid[g])
+        if plate3[f] is None or plate3[g] is None:
+            lap_fail.append(where)
+            continue
+        e = hub_ctr[g] - hub_ctr[f]
+        e = e / np.linalg.norm(e)
+        kf = int(np.argmin(np.linalg.norm(plate3[f] - hub_ctr[g], axis=1)))
+        kg = int(np.argmin(np.linalg.norm(plate3[g] - hub_ctr[f], axis=1)))
+        if "slots" in lk and list(lk["slots"]) != [kf, kg]:
+            slot_mismatch += 1
+        lap = float(np.dot(plate3[f][kf] - plate3[g][kg], e))
+        laps_checked += 1
+        if lap < lap_min[0]:
+            lap_min = (lap, where)
+        lap_max = max(lap_max, lap)
+        if lap < a.min_overlap:
+            lap_fail.append(where)
+        ce = abs(lap - float(lk.get("hub_overlap", float("nan"))))
+        if not ce <= LAP_CLAIM_TOL:
+            claim_fail.append(where)
+        if ce != ce:
+            ce = float("inf")
+        if lap_claim[1] is None or ce > lap_claim[0]:
+            lap_claim = (ce, where)
+        # ---- check 3 (informational): facing primary sides, 3D as in frame.json
+        # (the primary motion maps the flat tile exactly onto `primary`, so the
+        # moved sides are the frame.json sides).  Facing side = the side whose
+        # midpoint lies furthest towards the neighbour; the gap is their segment
+        # distance, negative when a facing side pierces the other primary plate
+        # (the primaries pass through each other).  The claim comparison uses |gap|.
+        Pf = np.array(units[f]["primary"], float)
+        Pg = np.array(units[g]["primary"], float)
+        ep = Pg.mean(0) - Pf.mean(0)
+        sa = int(np.argmax([np.dot(0.5 * (Pf[j] + Pf[(j + 1) % 4]), ep) for j in range(4)]))
+        sb = int(np.argmin([np.dot(0.5 * (Pg[j] + Pg[(j + 1) % 4]), ep) for j in range(4)]))
+        pa_, pb_ = seg_seg(Pf[sa], Pf[(sa + 1) % 4], Pg[sb], Pg[(sb + 1) % 4])
+        dd = float(np.linalg.norm(pb_ - pa_))
+
+        # through each other: the facing side of one unit pierces the other's
+        # primary plate (segment crosses the plate's plane inside the quad)
+        through = dd < 1e-6 or seg_pierces_quad(Pg[sb], Pg[(sb + 1) % 4], Pf) \
+            or seg_pierces_quad(Pf[sa], Pf[(sa + 1) % 4], Pg)
+        gap = -dd if through else dd
+        if through:
+            crossings.append(where)
+        claimed = float(lk.get("primary_gap", float("nan")))
+        if claimed == claimed:
+            gap_claim_err = max(gap_claim_err, abs(dd - claimed))
+        if gap_max[1] is None or gap > gap_max[0]:
+            gap_max = (gap, where)
+
+    # ---------------------------------------------------------- report
+    struct = [p for p in problems]
+    rows = []
+
+    def row(name, worst, limit, where, ok):
+        rows.append((name, worst, limit, where, ok))
+
+    row("leg length error (mm)", "%.3g" % leg_err[0], "<= %g" % LEG_TOL, leg_err[1] or "-",
+        not leg_fail and legs_checked > 0)
+    row("pin offset vs frame.json (mm)", "%.3g" % pin_off[0], "<= %g" % PIN_TOL, pin_off[1] or "-",
+        not pin_fail and legs_checked > 0)
+    row("hub lap min (mm)", "%.3f" % lap_min[0], ">= %g" % a.min_overlap, lap_min[1] or "-",
+        not lap_fail and laps_checked > 0)
+    row("hub lap vs claim (mm)", "%.3g" % lap_claim[0], "<= %g" % LAP_CLAIM_TOL, lap_claim[1] or "-",
+        not claim_fail and laps_checked > 0)
+    row("DXF topology (slots/necks)", "%d problems" % len(struct), "0",
+        (struct[0][1] if struct else "-"), not struct)
+    row("kabsch residual (mm)", "%.3g" % kabsch_max, "<= %g" % KABSCH_TOL, "-", kabsch_max <= KABSCH_TOL)
+    ok = all(r[4] for r in rows)
+    w = [max(len(str(r[i])) for r in rows + [("check", "worst", "limit", "where", "ok")]) for i in range(4)]
+    print("fold check of %s: %d units, %d strips, %d links" % (a.dir, nu, len(strip_list), len(links)))
+    print("%-*s  %*s  %-*s  %-*s  %s" % (w[0], "check", w[1], "worst", w[2], "limit", w[3], "where", "ok"))
+    for r in rows:
+        print("%-*s  %*s  %-*s  %-*s  %s" % (w[0], r[0], w[1], r[1], w[2], r[2], w[3], r[3],
+                                            "ok" if r[4] else "FAIL"))
+    print("info: legs checked %d, laps checked %d, lap range %.3f .. %.3f mm"
+          % (legs_checked, laps_checked, lap_min[0], lap_max))
+    print("info: leg test with frame.json pins instead of ours: max %.3g mm; our |H-R| vs "
+          "pins.length: max %.3g mm" % (tool_leg_err, tool_len_err))
+    print("info: hub plate corners vs frame.json hub_plate: max %.3g mm (%s); links whose "
+          "facing corners differ from links[].slots: %d" % (plate_dev[0], plate_dev[1], slot_mismatch))
+    print("info: largest primary gap %.3f mm (%s) (vs links[].primary_gap: max diff %.3g mm); "
+          "links with facing primary sides passing through each other: %d%s"
+          % (gap_max[0], gap_max[1], gap_claim_err, len(crossings),
+                                                 (" (" + ", ".join(crossings[:5]) + ")") if crossings else ""))
+    for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
+                      ("hub lap", lap_fail), ("lap claim", claim_fail)):
+        if lst:
+            print("FAIL %s: %d: %s%s" % (name, len(lst), ", ".join(lst[:10]), " ..." if len(lst) > 10 else ""))
+    for p in struct[:10]:
+        print("FAIL %s: %s: %s" % p)
+
+    if a.json:
+        out = {
+            "legs_checked": legs_checked,
+            "leg_error_max": leg_err[0],
+            "pin_offset_max": pin_off[0],
+            "laps_checked": laps_checked,
+            "lap_min": lap_min[0] if laps_checked else None,
+            "lap_max": lap_max if laps_checked else None,
+            "lap_claim_error_max": lap_claim[0],
+            "hub_plate_offset_max": plate_dev[0],
+            "leg_error_tool_pins_max": tool_leg_err,
+            "leg_length_claim_error_max": tool_len_err,
+            "kabsch_residual_max": kabsch_max,
+            "primary_gap_max": gap_max[0] if gap_max[1] else None,
+            "primary_crossings": len(crossings),
+            "primary_gap_claim_error_max": gap_claim_err,
+            "problems": ["%s: %s: %s" % p for p in struct],
+            "failing": {"leg": leg_fail, "pin": pin_fail, "lap": lap_fail, "lap_claim": claim_fail},
+            "ok": bool(ok),
+            "worst": {"leg_error": leg_err[1], "pin_offset": pin_off[1],
+                      "lap_min": lap_min[1], "lap_claim_error": lap_claim[1]},
+        }
+        with open(a.json, "w") as fh:
+            json.dump(out, fh, indent=1)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
