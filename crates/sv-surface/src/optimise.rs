@@ -32,6 +32,11 @@ const EDGE_MIN: Real = 0.5;
 const SINE_MIN: Real = 0.34;
 /// Weight of the barriers relative to the hard goals.
 const BARRIER_WEIGHT: Real = 3.0;
+/// The face-side barrier acts on sides shorter than this factor of the goal's shortest
+/// side or longer than this factor of its longest (a margin for the final measurement).
+const SIDE_BARRIER: (Real, Real) = (1.03, 0.98);
+/// Weight of the face-side barrier.
+const SIDE_WEIGHT: Real = 2.0;
 
 /// Normal equations `(J^T W J + eps I) dx = -J^T W r` assembled row by row in a fixed order.
 /// The first iteration records the pattern; later ones scatter each product straight to
@@ -237,6 +242,18 @@ pub(crate) fn optimise_indexed(
     let mut dx = vec![0.0; n];
     let mut hard: Real = 1.0;
     let goals = Goals::default();
+    // the face-side barrier's range, in the normalised lengths; it keeps the sides of a
+    // mesh that starts with all of them in the goal's range in it (where some start
+    // outside, the rows cannot grow or end there and pushing them in breaks the rest)
+    let side_lo = SIDE_BARRIER.0 * goals.side_range.0 * opts.unit_size / scale;
+    let side_hi = SIDE_BARRIER.1 * goals.side_range.1 * opts.unit_size / scale;
+    let sides_in = faces.iter().all(|f| {
+        (0..4).all(|k| {
+            let e = (pos(&x, f[(k + 1) % 4]) - pos(&x, f[k])).norm() * scale / opts.unit_size;
+            (goals.side_range.0..=goals.side_range.1).contains(&e)
+        })
+    });
+    let w_side = if sides_in { SIDE_WEIGHT } else { 0.0 };
     for it in 0..opts.max_iterations {
         iterations = it + 1;
         let decay = (0.5f64).powf(it as Real / 10.0).max(0.1);
@@ -426,6 +443,15 @@ pub(crate) fn optimise_indexed(
                 vals.clear();
                 push3(&mut cols, &mut vals, 3 * j, &(-u));
                 push3(&mut cols, &mut vals, 3 * i, &u);
+                system.row(&cols, &vals, r, w);
+                // the face-side goal: sides within 0.7-1.4 of the requested unit
+                let (r, w) = if len < side_lo {
+                    (side_lo - len, w_side)
+                } else if len > side_hi {
+                    (side_hi - len, w_side)
+                } else {
+                    (0.0, 0.0)
+                };
                 system.row(&cols, &vals, r, w);
                 // corner k between the edges to k+1 and k-1
                 let (prev, next) = (face[(k + 3) % 4], face[(k + 1) % 4]);
