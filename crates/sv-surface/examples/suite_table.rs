@@ -9,7 +9,7 @@ use std::time::Instant;
 use sv_surface::{build_secondary, Goals, TargetMesh};
 
 /// Minimal OBJ reader (`v x y z`, `f a b c ...`, 1-based, `/`-suffixes ignored).
-fn read_obj(path: &str) -> TargetMesh {
+pub fn read_obj(path: &str) -> TargetMesh {
     let text = std::fs::read_to_string(path).expect("read OBJ");
     let mut m = TargetMesh::default();
     for line in text.lines() {
@@ -56,11 +56,15 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for &unit in &units {
         for file in &files {
-            let name = std::path::Path::new(file)
+            let name = std::path::Path::new(file.trim_start_matches("builtin:"))
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default();
-            let target = read_obj(file);
+            let target = if file.starts_with("builtin:") {
+                sv_surface::builtin_target(file).expect("builtin")
+            } else {
+                read_obj(file)
+            };
             let opts = sv_surface::SecondaryOptions {
                 unit_size: unit,
                 ..Default::default()
