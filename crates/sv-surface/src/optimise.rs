@@ -30,6 +30,11 @@ const STOP_CLOSENESS: Real = 0.6;
 const EDGE_MIN: Real = 0.5;
 /// Sine of the corner angle below which the corner barrier acts (about 20 and 160 deg).
 const SINE_MIN: Real = 0.34;
+/// Iterations over which the best iterate's distance from the goals must fall while the
+/// hard goals are unmet, else the run stops (on that iterate).
+const STALL_WINDOW: usize = 20;
+/// Relative fall of that distance that counts.
+const STALL_GAIN: Real = 0.01;
 /// Weight of the barriers relative to the hard goals.
 const BARRIER_WEIGHT: Real = 3.0;
 /// The face-side barrier acts on sides shorter than this factor of the goal's shortest
@@ -242,6 +247,70 @@ pub(crate) fn optimise_indexed(
     let mut dx = vec![0.0; n];
     let mut hard: Real = 1.0;
     let goals = Goals::default();
+    // planarity max and conical max (degrees) of the iterate
+    let hard_of = |x: &[Real]| {
+        let mesh = QuadMesh {
+            vertices: (0..nv).map(|v| to_world(x, v)).collect(),
+            faces: faces.clone(),
+        };
+        let plan = (0..nf)
+            .map(|f| {
+                let p = mesh.face_points(f);
+                let mean = (0..4).map(|k| (p[(k + 1) % 4] - p[k]).norm()).sum::<Real>() / 4.0;
+                quad_diagonal_distance(&p) / mean
+            })
+            .fold(0.0, Real::max);
+        let cone = mesh
+            .conical_residuals()
+            .into_iter()
+            .map(|(_, r)| r)
+            .fold(0.0, Real::max)
+            .to_degrees();
+        (plan, cone)
+    };
+    // fraction of nearly square faces and the shortest and longest side / unit
+    let shape_of = |x: &[Real]| {
+        let (mut good, mut short, mut long, mut sum) = (0usize, Real::INFINITY, 0.0 as Real, 0.0);
+        for f in &faces {
+            let p = f.map(|v| pos(x, v));
+            if edge_ratio(&p) <= crate::EDGE_RATIO_LIMIT {
+                good += 1;
+            }
+            for k in 0..4 {
+                let e = (p[(k + 1) % 4] - p[k]).norm();
+                sum += e;
+                short = short.min(e * scale / opts.unit_size);
+                long = long.max(e * scale / opts.unit_size);
+            }
+        }
+        let mean = sum / (4 * nf) as Real;
+        (good as Real / nf as Real, short, long, mean)
+    };
+    // how far an iterate is from the goals: (goals missed, summed relative excess)
+    let merit = |(plan, cone): (Real, Real), far: Real, x: &[Real]| {
+        let (square, short, long, mean) = shape_of(x);
+        let ratios = [
+            plan / goals.planarity,
+            cone / goals.conical_deg,
+            // `far` is in initial mean edges, the goal in the iterate's
+            far / mean.max(1e-9) / goals.closeness,
+            goals.edge_ratio_fraction / square.max(1e-9),
+            (goals.side_range.0 / short.max(1e-9)).max(long / goals.side_range.1),
+        ];
+        // logarithmic excess, so that no goal's scale dominates; leaving the target
+        // (which also uncovers it) counts three times
+        let weight = [1.0, 1.0, 3.0, 1.0, 1.0];
+        ratios
+            .iter()
+            .zip(weight)
+            .map(|(&r, w)| w * r.max(1.0).ln())
+            .sum::<Real>()
+    };
+    let mut current_hard = hard_of(&x);
+    // the best iterate so far by `merit`: where the goals conflict the run ends on it
+    let mut best: Option<(Real, Vec<Real>)> = None;
+    // the iteration at which the best merit last fell by STALL_GAIN
+    let mut improved_at = 0usize;
     // the face-side barrier's range, in the normalised lengths; it keeps the sides of a
     // mesh that starts with all of them in the goal's range in it (where some start
     // outside, the rows cannot grow or end there and pushing them in breaks the rest)
@@ -381,6 +450,15 @@ pub(crate) fn optimise_indexed(
                     system.row(&[3 * v + k], &[1.0], d[k], 5.0 * opts.boundary_weight);
                 }
             }
+        }
+        let m = merit(current_hard, far, &x);
+        if let Some(b) = &best {
+            if m < b.0 - STALL_GAIN * b.0.max(1e-3) {
+                improved_at = it;
+            }
+        }
+        if best.as_ref().is_none_or(|b| m <= b.0) {
+            best = Some((m, x.clone()));
         }
         // fairness
         for t in &topo.triples {
@@ -533,23 +611,8 @@ pub(crate) fn optimise_indexed(
         x = trial;
         progress(it, system.energy);
         // convergence on the hard goals
-        let mesh = QuadMesh {
-            vertices: (0..nv).map(|v| to_world(&x, v)).collect(),
-            faces: faces.clone(),
-        };
-        let plan = (0..nf)
-            .map(|f| {
-                let p = mesh.face_points(f);
-                let mean = (0..4).map(|k| (p[(k + 1) % 4] - p[k]).norm()).sum::<Real>() / 4.0;
-                quad_diagonal_distance(&p) / mean
-            })
-            .fold(0.0, Real::max);
-        let cone = mesh
-            .conical_residuals()
-            .into_iter()
-            .map(|(_, r)| r)
-            .fold(0.0, Real::max)
-            .to_degrees();
+        let (plan, cone) = hard_of(&x);
+        current_hard = (plan, cone);
         let hard_met = plan <= opts.planarity_tolerance && cone <= opts.conical_tolerance_deg;
         // the hard gain grows while the hard goals are unmet and the mesh still follows
         // the target; where they cannot be met without leaving it (the goals conflict)
@@ -570,8 +633,30 @@ pub(crate) fn optimise_indexed(
         let stalled = step * max_move < 1e-3
             && max_move <= opts.max_step
             && (hard_met || hard >= HARD_GAIN_MAX || hard <= HARD_GAIN_MIN);
-        if it >= 5 && ((hard_met && soft_met) || stalled) {
+        // no longer falling: the best iterate's distance from the goals has not fallen
+        // by STALL_GAIN for STALL_WINDOW iterations (the goals conflict)
+        let flat = !hard_met
+            && best.as_ref().is_some_and(|b| b.0 > 0.0)
+            && it >= improved_at + STALL_WINDOW;
+        if it >= 5 && ((hard_met && soft_met) || stalled || (!hard_met && flat)) {
             break;
+        }
+    }
+    // the last iterate, or an earlier one nearer the goals (where they conflict the
+    // residuals wander)
+    if let Some((m, bx)) = best {
+        let mut far = 0.0f64;
+        for v in 0..nv {
+            let p = to_world(&x, v);
+            let cp = index.closest_near(&p, hints[v]);
+            far = far.max(((p - cp.point) / scale).norm());
+            if topo.boundary[v] {
+                let b = index.closest_on_boundary(&p);
+                far = far.max(((p - b.point) / scale).norm());
+            }
+        }
+        if merit(current_hard, far, &x) > m {
+            x = bx;
         }
     }
     let mesh = QuadMesh {
