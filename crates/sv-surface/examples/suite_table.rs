@@ -9,7 +9,7 @@ use std::time::Instant;
 use sv_surface::{build_secondary, Goals, TargetMesh};
 
 /// Minimal OBJ reader (`v x y z`, `f a b c ...`, 1-based, `/`-suffixes ignored).
-pub fn read_obj(path: &str) -> TargetMesh {
+fn read_obj(path: &str) -> TargetMesh {
     let text = std::fs::read_to_string(path).expect("read OBJ");
     let mut m = TargetMesh::default();
     for line in text.lines() {

@@ -34,7 +34,7 @@ const SINE_MIN: Real = 0.34;
 /// hard goals are unmet, else the run stops (on that iterate).
 const STALL_WINDOW: usize = 20;
 /// Relative fall of that distance that counts.
-const STALL_GAIN: Real = 0.01;
+const STALL_GAIN: Real = 0.02;
 /// Weight of the barriers relative to the hard goals.
 const BARRIER_WEIGHT: Real = 3.0;
 /// The face-side barrier acts on sides shorter than this factor of the goal's shortest
@@ -309,8 +309,11 @@ pub(crate) fn optimise_indexed(
     let mut current_hard = hard_of(&x);
     // the best iterate so far by `merit`: where the goals conflict the run ends on it
     let mut best: Option<(Real, Vec<Real>)> = None;
-    // the iteration at which the best merit last fell by STALL_GAIN
+    // the iteration at which the merit last fell below (1 - STALL_GAIN) of its value at
+    // the previous such iteration
     let mut improved_at = 0usize;
+    // ... and its value then
+    let mut mark = Real::INFINITY;
     // the face-side barrier's range, in the normalised lengths; it keeps the sides of a
     // mesh that starts with all of them in the goal's range in it (where some start
     // outside, the rows cannot grow or end there and pushing them in breaks the rest)
@@ -452,10 +455,9 @@ pub(crate) fn optimise_indexed(
             }
         }
         let m = merit(current_hard, far, &x);
-        if let Some(b) = &best {
-            if m < b.0 - STALL_GAIN * b.0.max(1e-3) {
-                improved_at = it;
-            }
+        if m < (1.0 - STALL_GAIN) * mark {
+            improved_at = it;
+            mark = m;
         }
         if best.as_ref().is_none_or(|b| m <= b.0) {
             best = Some((m, x.clone()));
