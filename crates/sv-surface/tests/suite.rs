@@ -200,8 +200,8 @@ fn l_footprint_dome_lens_and_torus_patch_meet_every_goal_at_300_and_150() {
 }
 
 /// Every target of the suite at 300 mm: an unfolded mesh (convex faces facing up, no
-/// collapsed edge) and every goal the report measures as missed named on one line with
-/// its worst face or vertex.
+/// collapsed edge) on the target, and every goal the report measures as missed named on
+/// one line with its worst face or vertex.
 #[test]
 fn every_suite_target_comes_back_unfolded_with_its_unmet_goals_named() {
     for name in SUITE {
@@ -217,6 +217,9 @@ fn every_suite_target_comes_back_unfolded_with_its_unmet_goals_named() {
                 assert!(e > 0.2 * r.mean_edge, "{name}: face {f} edge {e}");
             }
         }
+        // where the goals conflict the stage returns the iterate nearest them, which
+        // keeps every vertex on the target (5 % of the side)
+        assert!(r.closeness_max <= 0.05, "{name}: {r:?}");
         let named = |goal: &str| r.unmet.iter().any(|l| l.starts_with(goal));
         assert_eq!(r.planarity_max > 0.002, named("planarity"), "{name}: {r:?}");
         assert_eq!(r.conical_max_deg > 0.5, named("conical"), "{name}: {r:?}");
