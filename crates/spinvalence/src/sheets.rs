@@ -22,9 +22,29 @@ pub struct NestStage {
     pub sheet_files: Vec<String>,
 }
 
-/// Wall seconds to draw one part on its sheet (DXF with pierce points, SVG) on the reference
-/// machine, both cores: measured on the 664 strips of the 20 x 12 m dome (docs/nesting.md).
-const DRAW_SECONDS_PER_PART: f64 = 3e-3;
+/// Wall seconds to draw a part on its sheet (DXF with pierce points, SVG) on the reference
+/// machine, both cores: per part and per vertex of its contours and etching, fitted to the
+/// 664 strips of the 20 x 12 m dome and the 2,000 small plates of `many_parts.dxf`
+/// (docs/nesting.md).
+const DRAW_SECONDS_PER_PART: f64 = 50e-6;
+/// See [`DRAW_SECONDS_PER_PART`].
+const DRAW_SECONDS_PER_VERTEX: f64 = 2.5e-6;
+
+/// Share of the time box the nesting keeps whatever the drawing is expected to take.
+const NEST_SHARE_MIN: f64 = 0.5;
+
+/// Expected wall seconds to draw `parts` on their sheets.
+fn drawing_seconds(parts: &[SheetPart]) -> f64 {
+    let vertices: usize = parts
+        .iter()
+        .map(|p| {
+            p.part.outer.vertices.len()
+                + p.part.holes.iter().map(|h| h.vertices.len()).sum::<usize>()
+                + p.etch.iter().map(Vec::len).sum::<usize>()
+        })
+        .sum();
+    DRAW_SECONDS_PER_PART * parts.len() as f64 + DRAW_SECONDS_PER_VERTEX * vertices as f64
+}
 
 /// Nest `parts` with `options` and draw the sheets in `convention`; `thickness` (mm) goes
 /// into the file names and titles when known. `options.time_limit` bounds both (the nesting
@@ -38,9 +58,13 @@ pub fn run(
 ) -> Result<NestStage> {
     let plain: Vec<Part> = parts.iter().map(|p| p.part.clone()).collect();
     // the time box holds the drawing too: the nesting gets what drawing these parts leaves
-    let drawing = Duration::from_secs_f64(DRAW_SECONDS_PER_PART * parts.len() as f64);
+    // (at least half of it)
+    let drawing = Duration::from_secs_f64(drawing_seconds(parts));
     let nesting = NestOptions {
-        time_limit: options.time_limit.saturating_sub(drawing),
+        time_limit: options
+            .time_limit
+            .saturating_sub(drawing)
+            .max(options.time_limit.mul_f64(NEST_SHARE_MIN)),
         ..options.clone()
     };
     let bar = progress_bar(quiet, 1000, "nesting");
@@ -106,9 +130,32 @@ pub fn search_row(evaluations: u64, budget: u64, cut: bool, seconds: f64) -> Str
     }
 }
 
+/// The `construction` row of a summary when the time cap stopped the construction: how
+/// many parts it left to rows of bounding boxes.
+pub fn construction_row(report: &NestReport, seconds: f64) -> Option<String> {
+    let s = &report.search;
+    let parts: usize = report.sheets.iter().map(|x| x.placements.len()).sum();
+    s.construction_cut.then(|| {
+        format!(
+            "cut by the {seconds} s time cap: {} of {parts} parts went onto sheets of their \
+             own in rows of bounding boxes, and there was no search",
+            s.parts_in_rows
+        )
+    })
+}
+
 /// The warning line for a search the time cap cut short (printed even with `--quiet`).
 pub fn cut_warning(report: &NestReport, seconds: f64) -> Option<String> {
     let s = &report.search;
+    if s.construction_cut {
+        return Some(format!(
+            "warning: nesting: the {seconds} s time cap stopped the construction before every \
+             part was placed: {} part(s) went onto sheets of their own in rows of bounding \
+             boxes, and there was no search, so these sheets depend on this machine's speed; \
+             give more --nest-seconds for the full layout",
+            s.parts_in_rows
+        ));
+    }
     s.cut_by_time.then(|| {
         format!(
             "warning: nesting: the {seconds} s time cap cut the search at {:.0} % of its work \
@@ -149,6 +196,9 @@ pub fn summary_rows(report: &NestReport, seconds: f64) -> Vec<Vec<String>> {
                 o.sheet + 1
             ),
         ]);
+    }
+    if let Some(c) = construction_row(report, seconds) {
+        rows.push(vec!["construction".into(), c]);
     }
     rows.push(vec![
         "search".into(),

@@ -8,9 +8,7 @@
 //! are on `INFO` too.
 
 use sv_dxf::{Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
-use sv_geom::planar::{
-    bbox, boundary_distance, point_in_polygon, point_segment_distance, polygon_area,
-};
+use sv_geom::planar::{bbox, point_in_polygon, polygon_area};
 use sv_geom::Contour;
 use sv_nest::{NestReport, Part};
 use sv_strips::{FlatStrip, StripProfile};
@@ -165,11 +163,34 @@ impl Placed {
         {
             return false;
         }
-        if clear > 0.0 && boundary_distance(p, &self.outer) < clear {
+        if clear > 0.0 && boundary_distance_fast(p, &self.outer) < clear {
             return true;
         }
         point_in_polygon(p, &self.outer) && !self.holes.iter().any(|h| point_in_polygon(p, h))
     }
+}
+
+/// Squared distance from `p` to the segment `ab` (the inner loops compare squares: a
+/// square root per edge costs more than the rest of the test).
+fn segment_distance2(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (ex, ey) = (p[0] - a[0] - t * dx, p[1] - a[1] - t * dy);
+    ex * ex + ey * ey
+}
+
+/// Distance from `p` to the boundary of the closed polygon `poly`.
+fn boundary_distance_fast(p: [f64; 2], poly: &[[f64; 2]]) -> f64 {
+    let n = poly.len();
+    (0..n)
+        .map(|i| segment_distance2(p, poly[i], poly[(i + 1) % n]))
+        .fold(f64::INFINITY, f64::min)
+        .sqrt()
 }
 
 /// The point inside the closed polygon `poly` farthest from its boundary, and that
@@ -183,16 +204,22 @@ fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
     let mut best = ([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0], -1.0);
     let n = poly.len();
     let consider = |p: [f64; 2], best: &mut ([f64; 2], f64)| {
-        if point_in_polygon(p, poly) {
-            // the distance to the boundary, given up as soon as it is no better
-            let mut d = f64::INFINITY;
-            for i in 0..n {
-                d = d.min(point_segment_distance(p, poly[i], poly[(i + 1) % n]));
-                if d <= best.1 {
-                    return;
-                }
+        // the squared distance to the boundary, given up as soon as it is no better; then
+        // whether the point is inside (most candidates fail the first test early)
+        let floor = if best.1 > 0.0 {
+            best.1 * best.1
+        } else {
+            best.1
+        };
+        let mut d2 = f64::INFINITY;
+        for i in 0..n {
+            d2 = d2.min(segment_distance2(p, poly[i], poly[(i + 1) % n]));
+            if d2 <= floor {
+                return;
             }
-            *best = (p, d);
+        }
+        if point_in_polygon(p, poly) {
+            *best = (p, d2.sqrt());
         }
     };
     consider(best.0, &mut best);
@@ -231,10 +258,11 @@ fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
             consider([mid[0] + t * nrm[0], mid[1] + t * nrm[1]], &mut best);
         }
     }
-    // refine: shrinking grids around the best point
+    // refine: shrinking grids around the best point, until a grid gains less than 1 %
     let mut half = (best.1.max(reach / 64.0)).max(1e-3);
     const N: usize = 6;
     for _ in 0..4 {
+        let before = best.1;
         let c = best.0;
         for i in 0..=N {
             for j in 0..=N {
@@ -246,6 +274,9 @@ fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
             }
         }
         half /= 3.0;
+        if before > 0.0 && best.1 < 1.01 * before {
+            break;
+        }
     }
     best
 }
@@ -268,13 +299,16 @@ fn outside_pierce(parts: &[Placed], k: usize, offset: f64, sheet: [f64; 2]) -> [
         .collect();
     let m = me.outer.len();
     edges.extend((0..m).map(|i| (me.outer[i], me.outer[(i + 1) % m], true)));
-    edges.retain(|e| e.2 && (e.1[0] - e.0[0]).hypot(e.1[1] - e.0[1]) > 1e-6);
-    edges.sort_by(|x, y| {
-        let l = |e: &([f64; 2], [f64; 2], bool)| (e.1[0] - e.0[0]).hypot(e.1[1] - e.0[1]);
-        l(y).total_cmp(&l(x))
-    });
+    // longest first (the sort is stable), each length computed once
+    let mut edges: Vec<(f64, [f64; 2], [f64; 2])> = edges
+        .into_iter()
+        .filter(|e| e.2)
+        .map(|(a, b, _)| ((b[0] - a[0]).hypot(b[1] - a[1]), a, b))
+        .filter(|e| e.0 > 1e-6)
+        .collect();
+    edges.sort_by(|x, y| y.0.total_cmp(&x.0));
     let mut best = ([me.lo[0] - offset, me.lo[1] - offset], f64::NEG_INFINITY);
-    for (a, b, _) in edges {
+    for (_, a, b) in edges {
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
         let len = dx.hypot(dy);
         // outward normal of a counter-clockwise outline is the edge direction turned right
@@ -300,7 +334,7 @@ fn outside_pierce(parts: &[Placed], k: usize, offset: f64, sheet: [f64; 2]) -> [
             clear = clear.min(if q.covers(p, 0.0) {
                 0.0
             } else {
-                boundary_distance(p, &q.outer)
+                boundary_distance_fast(p, &q.outer)
             });
         }
         if clear >= 0.9 * offset {

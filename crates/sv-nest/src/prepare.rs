@@ -5,7 +5,7 @@
 //! the set-up. Whoever makes an item, it is the same item: the result does not depend on
 //! the threads.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
 
 use jagua_rs::entities::Item;
@@ -71,6 +71,8 @@ pub(crate) struct PartInfo {
     pub area: f64,
     /// the construction order: convex hull area x diameter of the outline's vertices
     pub key: f64,
+    /// bounding box of the outline in the part's coordinates (arcs exact)
+    pub bounds: ([f64; 2], [f64; 2]),
 }
 
 /// A collision shape shared by congruent parts.
@@ -103,6 +105,8 @@ pub(crate) struct Prepared {
     /// kinds in the order the construction first needs them
     jobs: Vec<usize>,
     next_job: AtomicUsize,
+    /// set when the construction is over: the workers make no more items
+    stop: AtomicBool,
     done: Mutex<usize>,
     ready: Condvar,
 }
@@ -153,6 +157,7 @@ impl Prepared {
                 frame: motion.inverse(),
                 area: outlines[k].area,
                 key: outlines[k].key,
+                bounds: outlines[k].bounds,
             });
         }
         infos.sort_by(|a, b| b.key.total_cmp(&a.key).then(a.part.cmp(&b.part)));
@@ -171,6 +176,7 @@ impl Prepared {
             reps,
             jobs,
             next_job: AtomicUsize::new(0),
+            stop: AtomicBool::new(false),
             done: Mutex::new(0),
             ready: Condvar::new(),
         }
@@ -186,9 +192,20 @@ impl Prepared {
         self.kinds.iter().filter_map(|k| k.get()?.as_ref().ok())
     }
 
-    /// Makes items until none is left (a worker thread's loop).
+    /// Makes items until none is left or [`Prepared::stop`] is called (a worker thread's
+    /// loop).
     pub fn work(&self, parts: &[Part], setup: &Setup) {
-        while self.make_next(parts, setup) {}
+        while !self.stop.load(Ordering::Relaxed) {
+            if !self.make_next(parts, setup) {
+                break;
+            }
+        }
+    }
+
+    /// Tells the workers to make no more items (the construction is over: the items of
+    /// the parts it placed are made; those of the parts the clock left are not needed).
+    pub fn stop(&self) {
+        self.stop.store(true, Ordering::Relaxed);
     }
 
     /// Makes the next item in line; `false` when all are taken.

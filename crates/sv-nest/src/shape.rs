@@ -128,6 +128,8 @@ pub(crate) struct Outline {
     /// convex hull area x diameter of the vertices: the construction places large parts
     /// first
     pub key: f64,
+    /// bounding box (arcs exact): lower left, upper right
+    pub bounds: ([f64; 2], [f64; 2]),
 }
 
 impl Outline {
@@ -138,9 +140,13 @@ impl Outline {
             .iter()
             .flat_map(|a| hull.iter().map(move |b| (a[0] - b[0]).hypot(a[1] - b[1])))
             .fold(0.0, f64::max);
+        let bounds = pline.extents().map_or(([0.0; 2], [0.0; 2]), |e| {
+            ([e.min_x, e.min_y], [e.max_x, e.max_y])
+        });
         Self {
             area: pline.area(),
             key: crate::part::polygon_area(&hull).abs() * diameter,
+            bounds,
             pline,
         }
     }

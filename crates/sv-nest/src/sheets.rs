@@ -2,6 +2,9 @@
 
 use std::time::{Duration, Instant};
 
+use std::sync::Arc;
+
+use jagua_rs::entities::Item;
 use jagua_rs::geometry::geo_enums::RotationRange;
 use jagua_rs::geometry::DTransformation;
 use rand::SeedableRng;
@@ -214,6 +217,7 @@ pub struct LeftOut {
 
 /// How far the search went (`nest.json` `search`; all zero in files written before it).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct SearchReport {
     /// the work budget (collision evaluations) that decides the layout
     pub work_budget: u64,
@@ -222,9 +226,15 @@ pub struct SearchReport {
     /// collision evaluations of the construction before it (never cut short: every part is
     /// placed once)
     pub construction_evaluations: u64,
-    /// whether the wall-clock cap stopped the search before its work budget was spent: the
-    /// layout may then differ from a run on a faster or less busy machine
+    /// whether the wall-clock cap stopped the search before its work budget was spent, or
+    /// the construction before every part was placed: the layout may then differ from a
+    /// run on a faster or less busy machine
     pub cut_by_time: bool,
+    /// whether the wall-clock cap stopped the construction: the parts it had not placed
+    /// went onto sheets of their own in rows of bounding boxes, and there was no search
+    pub construction_cut: bool,
+    /// parts placed in rows of bounding boxes after a construction cut
+    pub parts_in_rows: usize,
 }
 
 impl SearchReport {
@@ -352,21 +362,36 @@ pub fn nest_sheets(
         .collect();
     let mut rng = Rng64::seed_from_u64(opts.seed);
     let mut budget = Budget::new(started, opts.time_limit, None);
+    let deadline = opts.time_limit.mul_f64(CONSTRUCTION_SHARE);
     // the set-up on the other cores while this one places
-    let bins = std::thread::scope(|scope| {
+    let (mut bins, late) = std::thread::scope(|scope| {
         for _ in 1..threads.min(prepared.kind_count()) {
             scope.spawn(|| prepared.work(parts, &setup));
         }
-        construct(
+        let built = construct(
             parts,
             &prepared,
             &setup,
             opts,
+            deadline,
             &mut rng,
             &mut budget,
             &mut left_out,
-        )
+        );
+        prepared.stop();
+        built
     });
+    // the parts the clock left: in rows of bounding boxes on sheets of their own (no
+    // collision shape needed); one that no row takes goes onto a sheet the usual way
+    let construction_cut = !late.is_empty();
+    let (rows, wide) = in_rows(&prepared, &setup, &late);
+    for pi in wide {
+        match new_sheet(parts, &prepared, &setup, opts, pi, &mut rng, &mut budget) {
+            Ok(sheet) => bins.push(sheet),
+            Err(l) => left_out.push(l),
+        }
+    }
+    let parts_in_rows: usize = rows.iter().map(|r| r.parts.len()).sum();
     let kind = |k: usize| -> &Kind {
         prepared
             .kind(k, parts, &setup)
@@ -378,7 +403,16 @@ pub fn nest_sheets(
         .iter()
         .flat_map(|(_, b)| b.members.iter().map(|mm| &prepared.parts[mm.inst]))
         .collect();
-    let lb_sizes: Vec<f64> = placed.iter().map(|p| kind(p.kind).lb_area).collect();
+    // a part in a row may have no collision shape: its outline area (smaller than the
+    // grown one) keeps the bound a bound
+    let lb_sizes: Vec<f64> = placed
+        .iter()
+        .map(|p| kind(p.kind).lb_area)
+        .chain(
+            rows.iter()
+                .flat_map(|r| r.parts.iter().map(|q| prepared.parts[q.0].area)),
+        )
+        .collect();
     let cap = setup
         .usable
         .iter()
@@ -413,19 +447,33 @@ pub fn nest_sheets(
         k.dedup();
         k
     };
-    let rich = crate::prepare::parallel_map(in_window.len(), |i| kind(in_window[i]).rich());
-    let window: Vec<Sheet> = window
-        .into_iter()
-        .map(|(st, b)| {
-            let mut nb = Bin::new(b.bounds);
-            for m in &b.members {
-                let k = prepared.parts[m.inst].kind;
-                let item = &rich[in_window.binary_search(&k).expect("a window kind")];
-                nb.add(m.inst, item, m.dt);
-            }
-            (st, nb)
+    // (each one only while the clock allows: without them there is no search)
+    let rich: Vec<Option<Arc<Item>>> = if construction_cut {
+        Vec::new()
+    } else {
+        crate::prepare::parallel_map(in_window.len(), |i| {
+            (started.elapsed() < opts.time_limit).then(|| kind(in_window[i]).rich())
         })
-        .collect();
+    };
+    let searching = !construction_cut && rich.iter().all(Option::is_some);
+    let window: Vec<Sheet> = if searching {
+        window
+            .into_iter()
+            .map(|(st, b)| {
+                let mut nb = Bin::new(b.bounds);
+                for m in &b.members {
+                    let k = prepared.parts[m.inst].kind;
+                    let item = rich[in_window.binary_search(&k).expect("a window kind")]
+                        .as_ref()
+                        .expect("made");
+                    nb.add(m.inst, item, m.dt);
+                }
+                (st, nb)
+            })
+            .collect()
+    } else {
+        window
+    };
     let rest_used: f64 = rest.iter().map(|(st, _)| sheet_area(*st)).sum();
     let rest_area: f64 = rest
         .iter()
@@ -451,36 +499,41 @@ pub fn nest_sheets(
     let searches = DEFAULT_SEARCHES as u64;
     let share = work / searches;
     let others = rest.len();
-    let results: Vec<Searched> = std::thread::scope(|scope| {
-        let handles: Vec<_> = (1..searches)
-            .map(|k| {
-                let mut mine = window.clone();
-                let seed = opts.seed ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-                scope.spawn(move || {
-                    let mut b = Budget::new(started, opts.time_limit, Some(share));
-                    let mut r = Rng64::seed_from_u64(seed);
-                    improve(&mut mine, others, lb, &mut r, &mut b, opts, &mut |_, _| {});
-                    (mine, b.evals, b.was_cut())
+    let results: Vec<Searched> = if !searching {
+        // the clock ran out before the search could start
+        vec![(window, 0, work > 0)]
+    } else {
+        std::thread::scope(|scope| {
+            let handles: Vec<_> = (1..searches)
+                .map(|k| {
+                    let mut mine = window.clone();
+                    let seed = opts.seed ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+                    scope.spawn(move || {
+                        let mut b = Budget::new(started, opts.time_limit, Some(share));
+                        let mut r = Rng64::seed_from_u64(seed);
+                        improve(&mut mine, others, lb, &mut r, &mut b, opts, &mut |_, _| {});
+                        (mine, b.evals, b.was_cut())
+                    })
                 })
-            })
-            .collect();
-        let mut first = window.clone();
-        let mut b = Budget::new(started, opts.time_limit, Some(share));
-        improve(
-            &mut first,
-            others,
-            lb,
-            &mut rng,
-            &mut b,
-            opts,
-            &mut |w, b| report_progress(w, b, progress),
-        );
-        let mut all = vec![(first, b.evals, b.was_cut())];
-        for h in handles {
-            all.push(h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
-        }
-        all
-    });
+                .collect();
+            let mut first = window.clone();
+            let mut b = Budget::new(started, opts.time_limit, Some(share));
+            improve(
+                &mut first,
+                others,
+                lb,
+                &mut rng,
+                &mut b,
+                opts,
+                &mut |w, b| report_progress(w, b, progress),
+            );
+            let mut all = vec![(first, b.evals, b.was_cut())];
+            for h in handles {
+                all.push(h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
+            }
+            all
+        })
+    };
     let evaluations: u64 = results.iter().map(|r| r.1).sum();
     let cut = results.iter().any(|r| r.2);
     let (window, _, _) = results
@@ -538,12 +591,45 @@ pub fn nest_sheets(
             utilisation: area / (st.width * st.height),
         });
     }
-    let offcut = bins.last().map(|(stock, bin)| {
-        let st = opts.sheets[*stock];
-        // used_x_max is on grown outlines; the true part edge is `grow` inside it
-        let x = (f64::from(bin.used_x_max()) - setup.grow + s).min(st.width);
+    for row in &rows {
+        let st = opts.sheets[row.stock];
+        let mut placements: Vec<(usize, PartPlacement)> = row
+            .parts
+            .iter()
+            .map(|&(inst, rotation_deg, translation)| {
+                let part = prepared.parts[inst].part;
+                (
+                    part,
+                    PartPlacement {
+                        strip: parts[part].id.clone(),
+                        translation,
+                        rotation_deg,
+                    },
+                )
+            })
+            .collect();
+        placements.sort_by_key(|p| p.0);
+        let area: f64 = row.parts.iter().map(|q| area_of(q.0)).sum();
+        sheets.push(SheetReport {
+            width: st.width,
+            height: st.height,
+            placements: placements.into_iter().map(|p| p.1).collect(),
+            utilisation: area / (st.width * st.height),
+        });
+    }
+    // the right end of the grown outlines on the last sheet
+    let last_end = match rows.last() {
+        Some(r) => Some((r.stock, r.x_max)),
+        None => bins
+            .last()
+            .map(|(stock, bin)| (*stock, f64::from(bin.used_x_max()))),
+    };
+    let offcut = last_end.map(|(stock, end)| {
+        let st = opts.sheets[stock];
+        // the true part edge is `grow` inside the grown outline
+        let x = (end - setup.grow + s).min(st.width);
         Offcut {
-            sheet: bins.len() - 1,
+            sheet: sheets.len() - 1,
             x,
             y: 0.0,
             width: (st.width - x).max(0.0),
@@ -567,7 +653,9 @@ pub fn nest_sheets(
             work_budget: work,
             evaluations,
             construction_evaluations,
-            cut_by_time: cut,
+            cut_by_time: cut || construction_cut,
+            construction_cut,
+            parts_in_rows,
         },
     })
 }
@@ -584,25 +672,30 @@ fn last_x(bins: &[Sheet]) -> f32 {
 /// is full (the remaining, smaller parts go on the next ones; the search repacks the end).
 const FAILURES_TO_CLOSE: usize = 12;
 
+/// Share of [`NestOptions::time_limit`] the construction may take: the parts it has not
+/// placed by then go in rows of bounding boxes ([`in_rows`]), so that the stage holds its
+/// time box at any size (the rest of the time is for the report).
+const CONSTRUCTION_SHARE: f64 = 0.95;
+
 /// The construction: parts largest first onto sheets filled one after another. A sheet
 /// takes every remaining part that fits, until [`FAILURES_TO_CLOSE`] parts in a row did not
 /// fit; a part is not tried on a sheet whose free area is smaller, nor when a part no larger
 /// (in area and both sides of its bounding box) did not fit there. A new sheet takes the
 /// first stock size that holds its first part. Each try samples positions near the sheet's
-/// filled front first.
+/// filled front first. When the clock passes `deadline` (from the stage's start) the
+/// construction stops: it returns its sheets and the parts it did not place (in
+/// construction order; none when the clock did not stop it).
+#[allow(clippy::too_many_arguments)]
 fn construct(
     parts: &[Part],
     prepared: &Prepared,
     setup: &Setup,
     opts: &NestOptions,
+    deadline: Duration,
     rng: &mut Rng64,
     budget: &mut Budget,
     left_out: &mut Vec<LeftOut>,
-) -> Vec<Sheet> {
-    let mk_bin = |stock: usize| {
-        let u = setup.usable[stock];
-        Bin::new(rect(u.0 as f32, u.1 as f32, u.2 as f32, u.3 as f32))
-    };
+) -> (Vec<Sheet>, Vec<usize>) {
     let mut bins: Vec<Sheet> = Vec::new();
     let mut remaining: Vec<usize> = (0..prepared.parts.len()).collect();
     while !remaining.is_empty() {
@@ -612,7 +705,13 @@ fn construct(
         // (area, shorter side, longer side) of the shapes that did not fit
         let mut failed: Vec<(f64, f64, f64)> = Vec::new();
         let mut in_a_row = 0;
+        let mut late = false;
         for (n, &pi) in remaining.iter().enumerate() {
+            if budget.elapsed() >= deadline {
+                later.extend_from_slice(&remaining[n..]);
+                late = true;
+                break;
+            }
             let info = &prepared.parts[pi];
             let kind = match prepared.kind(info.kind, parts, setup) {
                 Ok(k) => k,
@@ -629,26 +728,13 @@ fn construct(
                 break;
             }
             let Some((_, bin)) = open.as_mut() else {
-                // a new sheet: the first stock size that holds the part
-                let mut placed = false;
-                for stock in 0..setup.usable.len() {
-                    let mut bin = mk_bin(stock);
-                    let samples = opts.construct_samples.max(200);
-                    if let Some(dt) = bin.blf_position(&kind.item, samples, f32::MAX, rng, budget) {
-                        bin.add(pi, &kind.item, dt);
-                        let u = setup.usable[stock];
+                match new_sheet(parts, prepared, setup, opts, pi, rng, budget) {
+                    Ok(sheet) => {
+                        let u = setup.usable[sheet.0];
                         free = (u.2 - u.0) * (u.3 - u.1) - kind.area;
-                        open = Some((stock, bin));
-                        placed = true;
-                        break;
+                        open = Some(sheet);
                     }
-                }
-                if !placed {
-                    let id = &parts[info.part].id;
-                    left_out.push(LeftOut {
-                        part: id.clone(),
-                        reason: format!("part {id}: no feasible position found on an empty sheet"),
-                    });
+                    Err(l) => left_out.push(l),
                 }
                 continue;
             };
@@ -674,9 +760,136 @@ fn construct(
         if let Some(b) = open {
             bins.push(b);
         }
+        if late {
+            return (bins, later);
+        }
         remaining = later;
     }
-    bins
+    (bins, Vec::new())
+}
+
+/// A new sheet holding part `pi` (of the prepared parts): the first stock size that holds
+/// it, else the part is left out.
+fn new_sheet(
+    parts: &[Part],
+    prepared: &Prepared,
+    setup: &Setup,
+    opts: &NestOptions,
+    pi: usize,
+    rng: &mut Rng64,
+    budget: &mut Budget,
+) -> Result<Sheet, LeftOut> {
+    let info = &prepared.parts[pi];
+    let id = &parts[info.part].id;
+    let kind = prepared
+        .kind(info.kind, parts, setup)
+        .as_ref()
+        .map_err(|reason| LeftOut {
+            part: id.clone(),
+            reason: reason.clone(),
+        })?;
+    for stock in 0..setup.usable.len() {
+        let u = setup.usable[stock];
+        let mut bin = Bin::new(rect(u.0 as f32, u.1 as f32, u.2 as f32, u.3 as f32));
+        let samples = opts.construct_samples.max(200);
+        if let Some(dt) = bin.blf_position(&kind.item, samples, f32::MAX, rng, budget) {
+            bin.add(pi, &kind.item, dt);
+            return Ok((stock, bin));
+        }
+    }
+    Err(LeftOut {
+        part: id.clone(),
+        reason: format!("part {id}: no feasible position found on an empty sheet"),
+    })
+}
+
+/// A sheet of parts in rows of their bounding boxes: its stock size, per part its
+/// instance (of the prepared parts), rotation (degrees) and translation, and the right
+/// end of the grown boxes.
+struct RowSheet {
+    stock: usize,
+    parts: Vec<(usize, f64, [f64; 2])>,
+    x_max: f64,
+}
+
+/// The allowed rotations that are multiples of 90 degrees (0 and 90 for free rotation).
+fn right_angles(range: &RotationRange) -> Vec<f64> {
+    match range {
+        RotationRange::None => vec![0.0],
+        RotationRange::Continuous => vec![0.0, 90.0],
+        RotationRange::Discrete(r) => r
+            .iter()
+            .map(|a| f64::from(*a).to_degrees())
+            .filter_map(|d| {
+                let q = (d / 90.0).round();
+                ((d - 90.0 * q).abs() < 1e-3).then_some((90.0 * q).rem_euclid(360.0))
+            })
+            .collect(),
+    }
+}
+
+/// The box of the box `lo`-`hi` turned by `deg` (a multiple of 90) about the origin.
+fn turned_box(lo: [f64; 2], hi: [f64; 2], deg: f64) -> ([f64; 2], [f64; 2]) {
+    match (deg / 90.0).round() as i64 {
+        1 => ([-hi[1], lo[0]], [-lo[1], hi[0]]),
+        2 => ([-hi[0], -hi[1]], [-lo[0], -lo[1]]),
+        3 => ([lo[1], -hi[0]], [hi[1], -lo[0]]),
+        _ => (lo, hi),
+    }
+}
+
+/// The parts `late` (of the prepared parts) on sheets of the first stock size in rows of
+/// their bounding boxes grown by the collision shapes' growth, tallest first, each turned
+/// by the allowed right angle that makes it lowest (next fit: a row is full when the next
+/// box does not fit its length, a sheet when the next row does not fit its height). No
+/// collision shape is needed, so this takes no time; disjoint grown boxes keep the parts
+/// the spacing apart. Returns the sheets and the parts no row takes (wider or taller than
+/// the sheet in every right angle).
+fn in_rows(prepared: &Prepared, setup: &Setup, late: &[usize]) -> (Vec<RowSheet>, Vec<usize>) {
+    let g = setup.grow;
+    let u = setup.usable[0];
+    let angles = right_angles(&setup.range);
+    // (instance, rotation, width, height, lower left of the turned box)
+    let mut boxes: Vec<(usize, f64, f64, f64, [f64; 2])> = Vec::new();
+    let mut wide = Vec::new();
+    for &pi in late {
+        let (lo, hi) = prepared.parts[pi].bounds;
+        let mut best: Option<(f64, f64, f64, [f64; 2])> = None;
+        for &a in &angles {
+            let (rlo, rhi) = turned_box(lo, hi, a);
+            let (w, h) = (rhi[0] - rlo[0] + 2.0 * g, rhi[1] - rlo[1] + 2.0 * g);
+            if w <= u.2 - u.0 && h <= u.3 - u.1 && best.is_none_or(|b| h < b.2) {
+                best = Some((a, w, h, rlo));
+            }
+        }
+        match best {
+            Some((a, w, h, rlo)) => boxes.push((pi, a, w, h, rlo)),
+            None => wide.push(pi),
+        }
+    }
+    boxes.sort_by(|a, b| b.3.total_cmp(&a.3).then(a.0.cmp(&b.0)));
+    let mut sheets: Vec<RowSheet> = Vec::new();
+    let (mut x, mut y, mut row) = (u.0, u.1, 0.0f64);
+    for (pi, a, w, h, rlo) in boxes {
+        if x + w > u.2 {
+            // the next row
+            (x, y, row) = (u.0, y + row, 0.0);
+        }
+        if sheets.is_empty() || y + h > u.3 {
+            sheets.push(RowSheet {
+                stock: 0,
+                parts: Vec::new(),
+                x_max: u.0,
+            });
+            (x, y, row) = (u.0, u.1, 0.0);
+        }
+        let sheet = sheets.last_mut().expect("a sheet");
+        sheet.parts.push((pi, a, [x + g - rlo[0], y + g - rlo[1]]));
+        sheet.x_max = sheet.x_max.max(x + w);
+        x += w;
+        row = row.max(h);
+    }
+    (sheets, wide)
 }
 
 /// The sheets the search works on: the [`WINDOW`] emptiest (ties: the later), split from
@@ -848,9 +1061,9 @@ fn fixed_seconds(shape_vertices: usize, construction_evaluations: u64) -> f64 {
 
 /// The work budget of [`nest_sheets`] when none is given: what the searches (one per core)
 /// do on the reference machine in a share of the time the set-up and construction leave
-/// (`fixed` seconds, [`fixed_seconds`]), scaled with the parts (shapes of `mean_vertices`
+/// (`fixed` seconds: the set-up and the construction), scaled with the parts (shapes of `mean_vertices`
 /// vertices). The rest is headroom, so that a busy machine still finishes the same work.
-fn sheet_work_budget(mean_vertices: f64, time: Duration, fixed: f64) -> u64 {
+pub fn sheet_work_budget(mean_vertices: f64, time: Duration, fixed: f64) -> u64 {
     let searches = DEFAULT_SEARCHES as f64;
     let seconds = crate::engine::WORK_SHARE_OF_TIME * (time.as_secs_f64() - fixed).max(0.0);
     (seconds * searches / sheet_seconds_per_evaluation(mean_vertices)) as u64

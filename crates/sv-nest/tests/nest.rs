@@ -304,11 +304,13 @@ fn a_busy_machine_gets_the_same_layout() {
     );
 }
 
-/// A time cap shorter than the work stops the search and says so; the construction is never
-/// cut (every part is placed once). Without a given work budget one is derived from the time
+/// A time cap the construction cannot meet (none at all, so this does not depend on the
+/// machine) stops it before the first part: every part goes in rows of bounding boxes, the
+/// layout is still valid (margin, spacing, each part once, parts too large left out by
+/// name), and the report says so. Without a given work budget one is derived from the time
 /// the set-up leaves: linear in it, and none without time.
 #[test]
-fn the_time_cap_cuts_the_search_and_says_by_how_much() {
+fn the_time_cap_cuts_the_construction_and_says_so() {
     let parts: Vec<Part> = test_parts().into_iter().take(10).collect();
     let capped = NestOptions {
         time_limit: Duration::ZERO,
@@ -316,9 +318,42 @@ fn the_time_cap_cuts_the_search_and_says_by_how_much() {
         ..small_opts()
     };
     let r = nest_sheets(&parts, &capped, &mut |_| {}).unwrap();
-    assert!(r.search.cut_by_time);
-    assert!(r.search.evaluations == 0 && r.search.construction_evaluations > 0);
+    assert!(
+        r.search.cut_by_time && r.search.construction_cut,
+        "{:?}",
+        r.search
+    );
+    assert_eq!(r.search.parts_in_rows, 10);
+    assert!(r.search.evaluations == 0 && r.search.construction_evaluations == 0);
     check_report(&parts, &r, &capped, &[]);
+    // the rows are tallest first and full: 10 parts of at most 190 x 126 mm (grown) on
+    // 586 x 386 mm of usable sheet take two sheets
+    assert_eq!(r.sheets.len(), 2, "{:?}", r.sheets);
+    assert_eq!(r.offcut.as_ref().map(|o| o.sheet), Some(1));
+    // the same with free rotation (rows turn parts by right angles) and parts to leave out
+    let mut more: Vec<Part> = test_parts().into_iter().take(12).collect();
+    more.push(Part::new(
+        "huge",
+        Contour::polygon(&[[0.0, 0.0], [2000.0, 0.0], [2000.0, 30.0], [0.0, 30.0]]),
+    ));
+    more.push(Part::new(
+        "tall",
+        Contour::polygon(&[[0.0, 0.0], [30.0, 0.0], [30.0, 500.0], [0.0, 500.0]]),
+    ));
+    let free = NestOptions {
+        rotations: sv_nest::RotationMode::Continuous,
+        ..capped.clone()
+    };
+    let r = nest_sheets(&more, &free, &mut |_| {}).unwrap();
+    check_report(&more, &r, &free, &["huge"]);
+    assert!(r.search.construction_cut && r.search.parts_in_rows == 13);
+    let tall = r
+        .sheets
+        .iter()
+        .flat_map(|s| &s.placements)
+        .find(|p| p.strip == "tall")
+        .unwrap();
+    assert_eq!(tall.rotation_deg, 90.0);
     let derived = |ms: u64| {
         let o = NestOptions {
             time_limit: Duration::from_millis(ms),
@@ -327,15 +362,14 @@ fn the_time_cap_cuts_the_search_and_says_by_how_much() {
         };
         nest_sheets(&parts, &o, &mut |_| {}).unwrap().search
     };
-    // linear in the time the set-up leaves: each 100 ms more adds the same work
-    let (w1, w2, w3) = (derived(200), derived(300), derived(400));
-    assert!(w1.work_budget > 10_000, "{w1:?}");
-    let (d1, d2) = (
-        w2.work_budget - w1.work_budget,
-        w3.work_budget - w2.work_budget,
-    );
-    assert!(d1 > 0 && d1.abs_diff(d2) <= 2, "{w1:?} {w2:?} {w3:?}");
     assert_eq!(derived(0).work_budget, 0);
+    // linear in the time the set-up leaves: each 100 ms more adds the same work
+    let w = |ms: u64| sv_nest::sheet_work_budget(40.0, Duration::from_millis(ms), 0.05);
+    let (w1, w2, w3) = (w(200), w(300), w(400));
+    assert!(w1 > 10_000, "{w1}");
+    let (d1, d2) = (w2 - w1, w3 - w2);
+    assert!(d1 > 0 && d1.abs_diff(d2) <= 2, "{w1} {w2} {w3}");
+    assert_eq!(w(50), 0);
     let inst = StripInstance::read(&dataset("jakobs1")).unwrap();
     let s1 = sv_nest::strip_work_budget(&inst, Duration::from_secs(1));
     let s3 = sv_nest::strip_work_budget(&inst, Duration::from_secs(3));

@@ -30,8 +30,18 @@ const STOP_CLOSENESS: Real = 0.6;
 const EDGE_MIN: Real = 0.5;
 /// Sine of the corner angle below which the corner barrier acts (about 20 and 160 deg).
 const SINE_MIN: Real = 0.34;
+/// Iterations over which the best iterate's distance from the goals must fall while the
+/// hard goals are unmet, else the run stops (on that iterate).
+const STALL_WINDOW: usize = 20;
+/// Relative fall of that distance that counts.
+const STALL_GAIN: Real = 0.02;
 /// Weight of the barriers relative to the hard goals.
 const BARRIER_WEIGHT: Real = 3.0;
+/// The face-side barrier acts on sides shorter than this factor of the goal's shortest
+/// side or longer than this factor of its longest (a margin for the final measurement).
+const SIDE_BARRIER: (Real, Real) = (1.03, 0.98);
+/// Weight of the face-side barrier.
+const SIDE_WEIGHT: Real = 2.0;
 
 /// Normal equations `(J^T W J + eps I) dx = -J^T W r` assembled row by row in a fixed order.
 /// The first iteration records the pattern; later ones scatter each product straight to
@@ -237,6 +247,85 @@ pub(crate) fn optimise_indexed(
     let mut dx = vec![0.0; n];
     let mut hard: Real = 1.0;
     let goals = Goals::default();
+    // planarity max and conical max (degrees) of the iterate
+    let hard_of = |x: &[Real]| {
+        let mesh = QuadMesh {
+            vertices: (0..nv).map(|v| to_world(x, v)).collect(),
+            faces: faces.clone(),
+        };
+        let plan = (0..nf)
+            .map(|f| {
+                let p = mesh.face_points(f);
+                let mean = (0..4).map(|k| (p[(k + 1) % 4] - p[k]).norm()).sum::<Real>() / 4.0;
+                quad_diagonal_distance(&p) / mean
+            })
+            .fold(0.0, Real::max);
+        let cone = mesh
+            .conical_residuals()
+            .into_iter()
+            .map(|(_, r)| r)
+            .fold(0.0, Real::max)
+            .to_degrees();
+        (plan, cone)
+    };
+    // fraction of nearly square faces and the shortest and longest side / unit
+    let shape_of = |x: &[Real]| {
+        let (mut good, mut short, mut long, mut sum) = (0usize, Real::INFINITY, 0.0 as Real, 0.0);
+        for f in &faces {
+            let p = f.map(|v| pos(x, v));
+            if edge_ratio(&p) <= crate::EDGE_RATIO_LIMIT {
+                good += 1;
+            }
+            for k in 0..4 {
+                let e = (p[(k + 1) % 4] - p[k]).norm();
+                sum += e;
+                short = short.min(e * scale / opts.unit_size);
+                long = long.max(e * scale / opts.unit_size);
+            }
+        }
+        let mean = sum / (4 * nf) as Real;
+        (good as Real / nf as Real, short, long, mean)
+    };
+    // how far an iterate is from the goals: (goals missed, summed relative excess)
+    let merit = |(plan, cone): (Real, Real), far: Real, x: &[Real]| {
+        let (square, short, long, mean) = shape_of(x);
+        let ratios = [
+            plan / goals.planarity,
+            cone / goals.conical_deg,
+            // `far` is in initial mean edges, the goal in the iterate's
+            far / mean.max(1e-9) / goals.closeness,
+            goals.edge_ratio_fraction / square.max(1e-9),
+            (goals.side_range.0 / short.max(1e-9)).max(long / goals.side_range.1),
+        ];
+        // logarithmic excess, so that no goal's scale dominates; leaving the target
+        // (which also uncovers it) counts three times
+        let weight = [1.0, 1.0, 3.0, 1.0, 1.0];
+        ratios
+            .iter()
+            .zip(weight)
+            .map(|(&r, w)| w * r.max(1.0).ln())
+            .sum::<Real>()
+    };
+    let mut current_hard = hard_of(&x);
+    // the best iterate so far by `merit`: where the goals conflict the run ends on it
+    let mut best: Option<(Real, Vec<Real>)> = None;
+    // the iteration at which the merit last fell below (1 - STALL_GAIN) of its value at
+    // the previous such iteration
+    let mut improved_at = 0usize;
+    // ... and its value then
+    let mut mark = Real::INFINITY;
+    // the face-side barrier's range, in the normalised lengths; it keeps the sides of a
+    // mesh that starts with all of them in the goal's range in it (where some start
+    // outside, the rows cannot grow or end there and pushing them in breaks the rest)
+    let side_lo = SIDE_BARRIER.0 * goals.side_range.0 * opts.unit_size / scale;
+    let side_hi = SIDE_BARRIER.1 * goals.side_range.1 * opts.unit_size / scale;
+    let sides_in = faces.iter().all(|f| {
+        (0..4).all(|k| {
+            let e = (pos(&x, f[(k + 1) % 4]) - pos(&x, f[k])).norm() * scale / opts.unit_size;
+            (goals.side_range.0..=goals.side_range.1).contains(&e)
+        })
+    });
+    let w_side = if sides_in { SIDE_WEIGHT } else { 0.0 };
     for it in 0..opts.max_iterations {
         iterations = it + 1;
         let decay = (0.5f64).powf(it as Real / 10.0).max(0.1);
@@ -365,6 +454,14 @@ pub(crate) fn optimise_indexed(
                 }
             }
         }
+        let m = merit(current_hard, far, &x);
+        if m < (1.0 - STALL_GAIN) * mark {
+            improved_at = it;
+            mark = m;
+        }
+        if best.as_ref().is_none_or(|b| m <= b.0) {
+            best = Some((m, x.clone()));
+        }
         // fairness
         for t in &topo.triples {
             // boundary polylines keep their full fairness weight: it spaces them evenly
@@ -426,6 +523,15 @@ pub(crate) fn optimise_indexed(
                 vals.clear();
                 push3(&mut cols, &mut vals, 3 * j, &(-u));
                 push3(&mut cols, &mut vals, 3 * i, &u);
+                system.row(&cols, &vals, r, w);
+                // the face-side goal: sides within 0.7-1.4 of the requested unit
+                let (r, w) = if len < side_lo {
+                    (side_lo - len, w_side)
+                } else if len > side_hi {
+                    (side_hi - len, w_side)
+                } else {
+                    (0.0, 0.0)
+                };
                 system.row(&cols, &vals, r, w);
                 // corner k between the edges to k+1 and k-1
                 let (prev, next) = (face[(k + 3) % 4], face[(k + 1) % 4]);
@@ -507,23 +613,8 @@ pub(crate) fn optimise_indexed(
         x = trial;
         progress(it, system.energy);
         // convergence on the hard goals
-        let mesh = QuadMesh {
-            vertices: (0..nv).map(|v| to_world(&x, v)).collect(),
-            faces: faces.clone(),
-        };
-        let plan = (0..nf)
-            .map(|f| {
-                let p = mesh.face_points(f);
-                let mean = (0..4).map(|k| (p[(k + 1) % 4] - p[k]).norm()).sum::<Real>() / 4.0;
-                quad_diagonal_distance(&p) / mean
-            })
-            .fold(0.0, Real::max);
-        let cone = mesh
-            .conical_residuals()
-            .into_iter()
-            .map(|(_, r)| r)
-            .fold(0.0, Real::max)
-            .to_degrees();
+        let (plan, cone) = hard_of(&x);
+        current_hard = (plan, cone);
         let hard_met = plan <= opts.planarity_tolerance && cone <= opts.conical_tolerance_deg;
         // the hard gain grows while the hard goals are unmet and the mesh still follows
         // the target; where they cannot be met without leaving it (the goals conflict)
@@ -544,8 +635,30 @@ pub(crate) fn optimise_indexed(
         let stalled = step * max_move < 1e-3
             && max_move <= opts.max_step
             && (hard_met || hard >= HARD_GAIN_MAX || hard <= HARD_GAIN_MIN);
-        if it >= 5 && ((hard_met && soft_met) || stalled) {
+        // no longer falling: the best iterate's distance from the goals has not fallen
+        // by STALL_GAIN for STALL_WINDOW iterations (the goals conflict)
+        let flat = !hard_met
+            && best.as_ref().is_some_and(|b| b.0 > 0.0)
+            && it >= improved_at + STALL_WINDOW;
+        if it >= 5 && ((hard_met && soft_met) || stalled || (!hard_met && flat)) {
             break;
+        }
+    }
+    // the last iterate, or an earlier one nearer the goals (where they conflict the
+    // residuals wander)
+    if let Some((m, bx)) = best {
+        let mut far = 0.0f64;
+        for v in 0..nv {
+            let p = to_world(&x, v);
+            let cp = index.closest_near(&p, hints[v]);
+            far = far.max(((p - cp.point) / scale).norm());
+            if topo.boundary[v] {
+                let b = index.closest_on_boundary(&p);
+                far = far.max(((p - b.point) / scale).norm());
+            }
+        }
+        if merit(current_hard, far, &x) > m {
+            x = bx;
         }
     }
     let mesh = QuadMesh {

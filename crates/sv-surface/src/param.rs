@@ -201,74 +201,154 @@ fn initial_grid_indexed(
             area * 1e-6
         )));
     }
-    let uv: Vec<(Real, Real)> = conf
-        .u
-        .iter()
-        .zip(&conf.v)
-        .map(|(u, w)| (u * nx as Real, w * ny as Real))
-        .collect();
-    let locator = Locator::new(target, &uv, nx, ny);
-    // lattice point on side k where the side's free coordinate equals `t` (0..1)
-    let on_side = |k: usize, t: Real| {
-        let coord = |i: usize| {
-            let b = lp[side_loop[k][i]];
-            if k.is_multiple_of(2) {
-                conf.u[b]
-            } else {
-                conf.v[b]
-            }
-        };
-        let sl = &side_loop[k];
-        let mut best = (Real::INFINITY, v[lp[sl[0]]]);
-        for i in 0..sl.len() - 1 {
-            let (a, b) = (coord(i), coord(i + 1));
-            if (a - t) * (b - t) <= 0.0 && a != b {
-                let s = (t - a) / (b - a);
-                let p = v[lp[sl[i]]] + (v[lp[sl[i + 1]]] - v[lp[sl[i]]]) * s;
-                return p;
-            }
-            if (a - t).abs() < best.0 {
-                best = ((a - t).abs(), v[lp[sl[i]]]);
-            }
-        }
-        best.1
-    };
     let smooth = corners.map(|c| turning[c] < SMOOTH_CORNER_TURN);
-    let open = nx >= 4 && ny >= 4 && smooth.iter().any(|&s| s);
-    let failure = std::cell::Cell::new(None);
-    let mesh = QuadMesh::from_fn(nx, ny, |i, j| {
-        let (fu, fv) = (i as Real / nx as Real, j as Real / ny as Real);
-        if j == 0 {
-            return on_side(0, fu);
+    // the lattice of an `nx` x `ny` grid lifted onto the target
+    let grid = |nx: usize, ny: usize| -> Result<QuadMesh, SurfaceError> {
+        let uv: Vec<(Real, Real)> = conf
+            .u
+            .iter()
+            .zip(&conf.v)
+            .map(|(u, w)| (u * nx as Real, w * ny as Real))
+            .collect();
+        let locator = Locator::new(target, &uv, nx, ny);
+        // lattice point on side k where the side's free coordinate equals `t` (0..1)
+        let on_side = |k: usize, t: Real| {
+            let coord = |i: usize| {
+                let b = lp[side_loop[k][i]];
+                if k.is_multiple_of(2) {
+                    conf.u[b]
+                } else {
+                    conf.v[b]
+                }
+            };
+            let sl = &side_loop[k];
+            let mut best = (Real::INFINITY, v[lp[sl[0]]]);
+            for i in 0..sl.len() - 1 {
+                let (a, b) = (coord(i), coord(i + 1));
+                if (a - t) * (b - t) <= 0.0 && a != b {
+                    let s = (t - a) / (b - a);
+                    let p = v[lp[sl[i]]] + (v[lp[sl[i + 1]]] - v[lp[sl[i]]]) * s;
+                    return p;
+                }
+                if (a - t).abs() < best.0 {
+                    best = ((a - t).abs(), v[lp[sl[i]]]);
+                }
+            }
+            best.1
+        };
+        let open = nx >= 4 && ny >= 4 && smooth.iter().any(|&s| s);
+        let failure = std::cell::Cell::new(None);
+        let mesh = QuadMesh::from_fn(nx, ny, |i, j| {
+            let (fu, fv) = (i as Real / nx as Real, j as Real / ny as Real);
+            if j == 0 {
+                return on_side(0, fu);
+            }
+            if i == nx {
+                return on_side(1, fv);
+            }
+            if j == ny {
+                return on_side(2, fu);
+            }
+            if i == 0 {
+                return on_side(3, fv);
+            }
+            match locator.lift(i as Real, j as Real) {
+                Some(p) => p,
+                None => {
+                    failure.set(Some((i, j)));
+                    Point3::origin()
+                }
+            }
+        });
+        if let Some((i, j)) = failure.get() {
+            return Err(SurfaceError::Internal(format!(
+                "grid point ({i}, {j}) is outside the parametrised target"
+            )));
         }
-        if i == nx {
-            return on_side(1, fv);
+        // a grid corner where the boundary hardly turns would get a face corner near 180
+        // degrees: open it into two faces meeting at an interior valence-3 vertex
+        if open {
+            return Ok(open_smooth_corners(&mesh, nx, ny, smooth));
         }
-        if j == ny {
-            return on_side(2, fu);
-        }
-        if i == 0 {
-            return on_side(3, fv);
-        }
-        match locator.lift(i as Real, j as Real) {
-            Some(p) => p,
-            None => {
-                failure.set(Some((i, j)));
-                Point3::origin()
+        Ok(mesh)
+    };
+    let mesh = grid(nx, ny)?;
+    // The conformal factor varies over the patch (corners of other than 90 degrees, a
+    // torus's inner and outer side), so the grid sized by the mean area can have sides
+    // outside the goal's 0.7-1.4 of the unit while a grid one or two rows finer or
+    // coarser has them all inside: among the nearby counts (the aspect kept within one
+    // column of the modulus) take the one whose sides are farthest inside the range.
+    let (lo, hi) = SIDE_GOAL;
+    let fit = |m: &QuadMesh| side_fit(m, h, lo, hi);
+    if fit(&mesh) >= SIDE_MARGIN {
+        return Ok(mesh);
+    }
+    // ... and as many nearly square faces as the grid sized by the area (at most 0.98)
+    let square = square_fraction(&mesh).min(0.98);
+    let mut best = (fit(&mesh), None);
+    for ny2 in ny.saturating_sub(3).max(2)..=ny + 3 {
+        let nx0 = (ratio * ny2 as Real).round().max(2.0) as usize;
+        for nx2 in nx0.saturating_sub(1).max(2)..=nx0 + 1 {
+            if (nx2, ny2) == (nx, ny) {
+                continue;
+            }
+            // faces stay within 1.15 of square (the conformal faces are square)
+            let aspect = (nx2 as Real / ny2 as Real / ratio).ln().abs();
+            if aspect > SIZE_ASPECT.ln() {
+                continue;
+            }
+            let Ok(m) = grid(nx2, ny2) else { continue };
+            let f = fit(&m);
+            if f > best.0 + 1e-9 && square_fraction(&m) >= square {
+                best = (f, Some(m));
             }
         }
-    });
-    if let Some((i, j)) = failure.get() {
-        return Err(SurfaceError::Internal(format!(
-            "grid point ({i}, {j}) is outside the parametrised target"
-        )));
     }
-    // a grid corner where the boundary hardly turns would get a face corner near 180
-    // degrees: open it into two faces meeting at an interior valence-3 vertex
-    if open {
-        return Ok(open_smooth_corners(&mesh, nx, ny, smooth));
+    // a grid no count brings inside the range (rows that cannot grow: annular sectors)
+    // keeps the counts sized by the area
+    match best {
+        (f, Some(m)) if f >= 1.0 => Ok(m),
+        _ => Ok(mesh),
     }
-    Ok(mesh)
+}
+
+/// The face-side goal (every side within this range of the unit size), as in
+/// [`crate::Goals`].
+const SIDE_GOAL: (Real, Real) = (0.7, 1.4);
+/// A grid whose sides are within the goal by this factor (the optimiser moves them a
+/// little) keeps the counts sized by the area.
+const SIDE_MARGIN: Real = 1.04;
+/// Largest aspect (width / height over the conformal modulus) of a resized grid's faces.
+const SIZE_ASPECT: Real = 1.15;
+
+/// Fraction of the faces of `mesh` whose longest side is within
+/// [`crate::EDGE_RATIO_LIMIT`] of their shortest.
+fn square_fraction(mesh: &QuadMesh) -> Real {
+    let good = (0..mesh.faces.len())
+        .filter(|&f| {
+            let p = mesh.face_points(f);
+            let e = [0, 1, 2, 3].map(|k| (p[(k + 1) % 4] - p[k]).norm());
+            let long = e.iter().copied().fold(0.0, Real::max);
+            let short = e.iter().copied().fold(Real::INFINITY, Real::min);
+            long <= crate::EDGE_RATIO_LIMIT * short
+        })
+        .count();
+    good as Real / mesh.faces.len().max(1) as Real
+}
+
+/// How far inside `lo..hi` (times the unit `h`) the sides of `mesh` are:
+/// `min(shortest / lo, hi / longest)`, at least 1 when every side is inside.
+fn side_fit(mesh: &QuadMesh, h: Real, lo: Real, hi: Real) -> Real {
+    let (mut short, mut long) = (Real::INFINITY, 0.0 as Real);
+    for f in 0..mesh.faces.len() {
+        let p = mesh.face_points(f);
+        for k in 0..4 {
+            let e = (p[(k + 1) % 4] - p[k]).norm() / h;
+            short = short.min(e);
+            long = long.max(e);
+        }
+    }
+    (short / lo).min(hi / long)
 }
 
 /// Boundary turning (radians, over 0.75 unit either side) below which a grid corner is

@@ -163,35 +163,45 @@ fn automatic_layouts_put_the_irregular_vertices_the_footprint_needs() {
     }
 }
 
-/// The L meets every goal of the secondary stage at both sizes, the face sides within
-/// 0.7-1.4 of the unit included, and its frame passes the checks of `spinvalence check`.
+/// The L, the lens-shaped dome and the torus patch meet every goal of the secondary stage
+/// at both sizes, the face sides within 0.7-1.4 of the unit included, and their frames
+/// pass the checks of `spinvalence check`.
 #[test]
-fn l_footprint_meets_every_goal_at_300_and_150() {
-    for unit in [300.0, 150.0] {
-        let (mesh, r) = build_secondary(&load("l_footprint.obj"), &opts(unit), &mut |_, _| {})
-            .unwrap_or_else(|e| panic!("{e}"));
-        assert!(r.unmet.is_empty(), "{unit}: {:?}", r.unmet);
+fn l_footprint_dome_lens_and_torus_patch_meet_every_goal_at_300_and_150() {
+    for (name, unit) in ["l_footprint.obj", "dome_lens.obj", "torus_patch.obj"]
+        .into_iter()
+        .flat_map(|n| [(n, 300.0), (n, 150.0)])
+    {
+        let (mesh, r) = build_secondary(&load(name), &opts(unit), &mut |_, _| {})
+            .unwrap_or_else(|e| panic!("{name} {unit}: {e}"));
+        assert!(r.unmet.is_empty(), "{name} {unit}: {:?}", r.unmet);
         // the figures themselves, from the mesh
         for f in 0..mesh.faces.len() {
             let p = mesh.face_points(f);
             let side: Vec<f64> = (0..4).map(|k| (p[(k + 1) % 4] - p[k]).norm()).collect();
             let mean = side.iter().sum::<f64>() / 4.0;
             for s in &side {
-                assert!((0.7 * unit..=1.4 * unit).contains(s), "face {f}: {side:?}");
+                assert!(
+                    (0.7 * unit..=1.4 * unit).contains(s),
+                    "{name} {unit}: face {f}: {side:?}"
+                );
             }
             let d = sv_geom::quad_diagonal_distance(&p);
-            assert!(d <= 0.002 * mean, "face {f}: diagonal distance {d}");
+            assert!(
+                d <= 0.002 * mean,
+                "{name} {unit}: face {f}: diagonal distance {d}"
+            );
         }
         let solved = sv_frame::solve(&mesh, &sv_frame::SolveOptions::default(), &mut |_| {})
-            .unwrap_or_else(|e| panic!("{unit}: primary: {e}"));
+            .unwrap_or_else(|e| panic!("{name} {unit}: primary: {e}"));
         let checked = sv_frame::check_frame(&solved.to_frame_file(&mesh), &Default::default());
-        assert!(checked.ok(), "{unit}: {checked:?}");
+        assert!(checked.ok(), "{name} {unit}: {checked:?}");
     }
 }
 
 /// Every target of the suite at 300 mm: an unfolded mesh (convex faces facing up, no
-/// collapsed edge) and every goal the report measures as missed named on one line with
-/// its worst face or vertex.
+/// collapsed edge) on the target, and every goal the report measures as missed named on
+/// one line with its worst face or vertex.
 #[test]
 fn every_suite_target_comes_back_unfolded_with_its_unmet_goals_named() {
     for name in SUITE {
@@ -207,6 +217,9 @@ fn every_suite_target_comes_back_unfolded_with_its_unmet_goals_named() {
                 assert!(e > 0.2 * r.mean_edge, "{name}: face {f} edge {e}");
             }
         }
+        // where the goals conflict the stage returns the iterate nearest them, which
+        // keeps every vertex on the target (5 % of the side)
+        assert!(r.closeness_max <= 0.05, "{name}: {r:?}");
         let named = |goal: &str| r.unmet.iter().any(|l| l.starts_with(goal));
         assert_eq!(r.planarity_max > 0.002, named("planarity"), "{name}: {r:?}");
         assert_eq!(r.conical_max_deg > 0.5, named("conical"), "{name}: {r:?}");
