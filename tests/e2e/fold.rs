@@ -39,7 +39,11 @@ fn copy_of_default_build() -> Dir {
     let dir = Dir::new();
     fs::create_dir_all(dir.join("out/strips")).unwrap();
     for f in ["frame.json", "strips.json"] {
-        fs::copy(built.join(&format!("out/{f}")), dir.join(&format!("out/{f}"))).unwrap();
+        fs::copy(
+            built.join(&format!("out/{f}")),
+            dir.join(&format!("out/{f}")),
+        )
+        .unwrap();
     }
     for f in built.entries("out/strips") {
         fs::copy(

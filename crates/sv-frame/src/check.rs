@@ -117,7 +117,12 @@ fn plate_frame(q: &[Point3; 4]) -> Option<(Point3, Matrix3, Real, Real)> {
     }
     let x = d1.normalize();
     let z = n.normalize();
-    Some((c, Matrix3::from_columns(&[x, z.cross(&x), z]), d1.norm(), d2.norm()))
+    Some((
+        c,
+        Matrix3::from_columns(&[x, z.cross(&x), z]),
+        d1.norm(),
+        d2.norm(),
+    ))
 }
 
 /// The legs of a unit as cut, rebuilt from the file alone: the cut of its tile (the primary
@@ -320,7 +325,8 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
             .fold(Vector3::zeros(), |s, p| s + pt(p).coords)
             / 4.0;
         // measured on the hub plates as cut where the file has them
-        let plate = |u: &crate::UnitRecord, k: usize| pt(&u.hub_plate.as_ref().unwrap_or(&u.hub)[k]);
+        let plate =
+            |u: &crate::UnitRecord, k: usize| pt(&u.hub_plate.as_ref().unwrap_or(&u.hub)[k]);
         let o = hub_overlap(
             &Point3::from(ca),
             &plate(ua, k),
@@ -372,16 +378,9 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
         .into_iter()
         .chain(kinematics)
         .chain(cut.is_none().then_some(params))
-        .chain([
-        fitted,
-        gaps,
-        overlaps,
-        coverage,
-        planar,
-        conical,
-    ])
-    .map(Worst::row)
-    .collect();
+        .chain([fitted, gaps, overlaps, coverage, planar, conical])
+        .map(Worst::row)
+        .collect();
     CheckReport { rows }
 }
 
@@ -437,7 +436,11 @@ mod tests {
             }
         }
         let r = check_frame(&moved, &CheckOptions::default());
-        let legs = r.rows.iter().find(|r| r.name.starts_with("leg pin to pin")).unwrap();
+        let legs = r
+            .rows
+            .iter()
+            .find(|r| r.name.starts_with("leg pin to pin"))
+            .unwrap();
         assert!(!legs.ok && legs.worst > 0.5, "{legs:?}");
         assert!(legs.at.contains(&moved.units[12].id), "{legs:?}");
     }

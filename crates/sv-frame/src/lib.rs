@@ -31,10 +31,10 @@ pub use file::{
     FrameFile, FrameParams, LegPins, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT,
     FRAME_VERSION,
 };
-pub use unit::FrameUnits;
 pub use hub::{hubs_from_mesh, Hub};
 pub use mesh::{normal_cone, normal_cone_residual, Link, MeshChecks, QuadMesh};
 pub use solve::{
     evaluate, solve, Evaluation, GapObjective, Progress, SidePolicy, SolveOptions, SolveReport,
     Solved, DEFAULT_SPIN_ANGLE, STALL_WINDOW,
 };
+pub use unit::FrameUnits;

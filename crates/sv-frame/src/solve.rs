@@ -22,7 +22,8 @@ use sv_geom::{segment_closest, Point3, Real, Vector3};
 use sv_unit::{AxisCase, CutWidths, Deployment, Side};
 
 use crate::file::{
-    FrameParams, LegPins, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT, FRAME_VERSION,
+    FrameParams, LegPins, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT,
+    FRAME_VERSION,
 };
 use crate::{hubs_from_mesh, FrameError, FrameFile, FrameUnits, Hub, Link, MeshChecks, QuadMesh};
 
@@ -1015,11 +1016,15 @@ impl Solved {
                     hub: hub.corners().map(arr),
                     primary: primary.map(arr),
                     hub_plate: Some(self.units.hub_plate(f, hub).map(arr)),
-                    pins: self.units.pins_world(f, hub, dep).ok().map(|(h, r)| LegPins {
-                        hub: h.map(arr),
-                        rim: r.map(arr),
-                        length: self.units.legs(f, hub).length,
-                    }),
+                    pins: self
+                        .units
+                        .pins_world(f, hub, dep)
+                        .ok()
+                        .map(|(h, r)| LegPins {
+                            hub: h.map(arr),
+                            rim: r.map(arr),
+                            length: self.units.legs(f, hub).length,
+                        }),
                     axis_case: Some(dep.case),
                     side: Some(dep.side),
                     depth,

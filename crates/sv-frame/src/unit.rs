@@ -25,7 +25,10 @@ impl FrameUnits {
             return Ok(Self {
                 expansion,
                 legs: None,
-                hub_plates: hubs.iter().map(|h| h.rhombus.corners().map(Point3::from)).collect(),
+                hub_plates: hubs
+                    .iter()
+                    .map(|h| h.rhombus.corners().map(Point3::from))
+                    .collect(),
             });
         };
         let mut legs = Vec::with_capacity(hubs.len());
@@ -35,10 +38,8 @@ impl FrameUnits {
                 .rhombus
                 .corners()
                 .map(|c| Point2::new(c.x * expansion, c.y * expansion));
-            let layout = UnitLayout::new(&tile, w).map_err(|e| FrameError::Cut {
-                unit: f,
-                why: e.0,
-            })?;
+            let layout =
+                UnitLayout::new(&tile, w).map_err(|e| FrameError::Cut { unit: f, why: e.0 })?;
             legs.push(Linkage::new(&layout.pins()));
             hub_plates.push(layout.hub.map(|p| Point3::new(p.x, p.y, 0.0)));
         }

@@ -209,7 +209,11 @@ pub fn unit_targets(frame: &FrameFile) -> Result<Vec<UnitTarget>, String> {
         .map(|(i, u)| {
             // the hub plate as cut where the frame has it (same pose, the plate's outline)
             let hub = u.hub_plate.unwrap_or(u.hub);
-            let finite = hub.iter().chain(&u.primary).flatten().all(|v| v.is_finite());
+            let finite = hub
+                .iter()
+                .chain(&u.primary)
+                .flatten()
+                .all(|v| v.is_finite());
             match (finite, tile_pose(&hub), tile_pose(&u.primary)) {
                 (true, Some(hub_pose), Some(primary_pose)) => Ok(UnitTarget {
                     hub,

@@ -119,7 +119,8 @@ fn unit_cuts(
     tile: &[Point2; 4],
     p: &ProfileParams,
 ) -> Result<UnitCut, StripsError> {
-    let layout = UnitLayout::new(tile, &p.cut_widths()).map_err(|e| unit_error(strip, unit, e.0))?;
+    let layout =
+        UnitLayout::new(tile, &p.cut_widths()).map_err(|e| unit_error(strip, unit, e.0))?;
     let slots = layout
         .slot_paths
         .iter()

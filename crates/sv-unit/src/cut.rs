@@ -222,9 +222,9 @@ mod tests {
         for j in 0..4 {
             // hub pin near corner j, rim pin near corner j + 1: closer to them than to any
             // other corner
-            let near = |x: Point2| (0..4).min_by(|&a, &b| {
-                (x - tile[a]).norm().total_cmp(&(x - tile[b]).norm())
-            });
+            let near = |x: Point2| {
+                (0..4).min_by(|&a, &b| (x - tile[a]).norm().total_cmp(&(x - tile[b]).norm()))
+            };
             assert_eq!(near(p.hub[j]), Some(j));
             assert_eq!(near(p.rim[j]), Some((j + 1) % 4));
             // both inside the plate, the hub pin on the hub's side of the inner track

@@ -39,8 +39,8 @@ mod linkage;
 
 pub use cut::{inset, CutError, CutWidths, Pins, UnitLayout};
 pub use error::UnitError;
-pub use linkage::{Linkage, LEG_TOLERANCE};
 pub use kinematics::{
     axis, deploy, depth_squared, inverse, primary_in_hub_frame, rotation, AxisCase, CornerJacobian,
     Deployed, Deployment, Inverse, Rhombus, Side,
 };
+pub use linkage::{Linkage, LEG_TOLERANCE};

@@ -74,7 +74,11 @@ impl Linkage {
         rotation: &Matrix3,
         translation: &Vector3,
     ) -> Result<(Matrix3, Vector3), UnitError> {
-        let size = self.length.iter().fold(0.0, |a: Real, l| a.max(*l)).max(1.0);
+        let size = self
+            .length
+            .iter()
+            .fold(0.0, |a: Real, l| a.max(*l))
+            .max(1.0);
         let (mut r, mut p) = (*rotation, *translation);
         let worst_at = |r: &Matrix3, p: &Vector3| {
             self.leg_errors(r, p)
@@ -237,7 +241,10 @@ mod tests {
                     let (rot, p) = l.pose(&r, &Deployment::new(theta, phi)).unwrap();
                     assert!((rot.determinant() - 1.0).abs() < 1e-12);
                     for e in l.leg_errors(&rot, &p) {
-                        assert!(e.abs() < 1e-6, "{a}x{b} theta {theta} phi {phi}: leg off {e}");
+                        assert!(
+                            e.abs() < 1e-6,
+                            "{a}x{b} theta {theta} phi {phi}: leg off {e}"
+                        );
                     }
                 }
             }
