@@ -26,7 +26,8 @@ pub const NEST_WORK: [&str; 4] = ["--nest-evaluations", "800000", "--nest-second
 /// The nest stage's options in [`default_build`]: about the work budget the default 5 s
 /// give the pavilion (nest.json `search.work_budget`) and a time cap no busy test machine
 /// reaches, so that the sheets are those the default build finds on a quiet machine.
-const DEFAULT_NEST_WORK: [&str; 4] = ["--nest-evaluations", "1700000", "--nest-seconds", "3600"];
+pub const DEFAULT_NEST_WORK: [&str; 4] =
+    ["--nest-evaluations", "1700000", "--nest-seconds", "3600"];
 
 /// `spinvalence build` with every default but the nest stage's [`DEFAULT_NEST_WORK`] (the
 /// pavilion into `./out`), run once per test run in `target/tmp/e2e-default-build` and
