@@ -406,13 +406,7 @@ mod tests {
     fn solved_cap_as_cut() -> FrameFile {
         let mesh = QuadMesh::sphere_cap(5, 5, 3000.0, 300.0);
         let options = SolveOptions {
-            cut: Some(sv_unit::CutWidths {
-                rim: 5.0,
-                slot: 4.5,
-                leg: 18.0,
-                neck: 9.0,
-                joint: 4.5,
-            }),
+            cut: Some(sv_unit::CutWidths::STEEL_3MM),
             ..SolveOptions::default()
         };
         solve(&mesh, &options, &mut |_| {})

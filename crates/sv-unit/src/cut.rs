@@ -41,6 +41,16 @@ impl CutWidths {
         joint: 0.0,
     };
 
+    /// 3 mm sheet at about the least widths the profile's rules allow (rim, slot and joint
+    /// slot 1.5 t, neck 3 t, leg two necks; the rim 5 mm): hub 33.75 mm inside its tile.
+    pub const STEEL_3MM: CutWidths = CutWidths {
+        rim: 5.0,
+        slot: 4.5,
+        leg: 18.0,
+        neck: 9.0,
+        joint: 4.5,
+    };
+
     /// How far the hub plate lies inside the tile on every side (mm).
     pub fn hub_inset(&self) -> Real {
         self.joint / 2.0 + self.rim + 2.0 * self.slot + self.leg
@@ -206,13 +216,7 @@ mod tests {
         ]
     }
 
-    const DEFAULT: CutWidths = CutWidths {
-        rim: 5.0,
-        slot: 4.5,
-        leg: 18.0,
-        neck: 9.0,
-        joint: 4.5,
-    };
+    const DEFAULT: CutWidths = CutWidths::STEEL_3MM;
 
     #[test]
     fn legs_pin_near_the_corners_they_replace_and_the_hub_is_inset() {

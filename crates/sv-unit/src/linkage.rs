@@ -219,13 +219,7 @@ mod tests {
         r.corners().map(|c| Point2::new(c.x * e, c.y * e))
     }
 
-    const DEFAULT: CutWidths = CutWidths {
-        rim: 5.0,
-        slot: 4.5,
-        leg: 18.0,
-        neck: 9.0,
-        joint: 4.5,
-    };
+    const DEFAULT: CutWidths = CutWidths::STEEL_3MM;
 
     #[test]
     fn every_leg_of_the_cut_holds_exactly_over_the_chart() {
