@@ -170,25 +170,11 @@ impl Placed {
     }
 }
 
-/// Squared distance from `p` to the segment `ab` (the inner loops compare squares: a
-/// square root per edge costs more than the rest of the test).
-fn segment_distance2(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let (ex, ey) = (p[0] - a[0] - t * dx, p[1] - a[1] - t * dy);
-    ex * ex + ey * ey
-}
-
 /// Distance from `p` to the boundary of the closed polygon `poly`.
 fn boundary_distance_fast(p: [f64; 2], poly: &[[f64; 2]]) -> f64 {
     let n = poly.len();
     (0..n)
-        .map(|i| segment_distance2(p, poly[i], poly[(i + 1) % n]))
+        .map(|i| sv_geom::planar::point_segment_distance2(p, poly[i], poly[(i + 1) % n]))
         .fold(f64::INFINITY, f64::min)
         .sqrt()
 }
@@ -213,7 +199,11 @@ fn deepest_point(poly: &[[f64; 2]]) -> ([f64; 2], f64) {
         };
         let mut d2 = f64::INFINITY;
         for i in 0..n {
-            d2 = d2.min(segment_distance2(p, poly[i], poly[(i + 1) % n]));
+            d2 = d2.min(sv_geom::planar::point_segment_distance2(
+                p,
+                poly[i],
+                poly[(i + 1) % n],
+            ));
             if d2 <= floor {
                 return;
             }

@@ -28,6 +28,12 @@ pub fn orientation(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i8 {
 
 /// Distance from `p` to the segment `ab`.
 pub fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    point_segment_distance2(p, a, b).sqrt()
+}
+
+/// Squared distance from `p` to the segment `ab` (for inner loops that compare distances:
+/// a square root per edge costs more than the rest of the test).
+pub fn point_segment_distance2(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
     let len2 = dx * dx + dy * dy;
     let t = if len2 > 0.0 {
@@ -35,7 +41,8 @@ pub fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     } else {
         0.0
     };
-    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+    let (ex, ey) = (p[0] - a[0] - t * dx, p[1] - a[1] - t * dy);
+    ex * ex + ey * ey
 }
 
 /// Whether segments `ab` and `cd` cross properly: the ends of each strictly on both sides
