@@ -78,9 +78,11 @@ impl FaceMark {
     pub fn strokes(&self) -> Vec<Vec<[f64; 2]>> {
         let [x, y] = self.at;
         let ring = |r: f64| -> Vec<[f64; 2]> {
+            // the last point is the first, exactly
             (0..=Self::SEGMENTS)
                 .map(|i| {
-                    let a = std::f64::consts::TAU * i as f64 / Self::SEGMENTS as f64;
+                    let a =
+                        std::f64::consts::TAU * (i % Self::SEGMENTS) as f64 / Self::SEGMENTS as f64;
                     [x + r * a.cos(), y + r * a.sin()]
                 })
                 .collect()
