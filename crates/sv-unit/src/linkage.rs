@@ -28,8 +28,9 @@ pub struct Linkage {
     pub length: [Real; 4],
 }
 
-/// Largest leg error (mm) a projected pose may keep.
-pub const LEG_TOLERANCE: Real = 1e-9;
+/// Largest leg error (mm) a projected pose may keep: the 1e-6 mm of `spinvalence check`.
+/// The projection aims a million times lower and accepts this where rounding stalls it.
+pub const LEG_TOLERANCE: Real = 1e-6;
 
 /// Steps of the continuation from the zero-width legs to the legs as cut.
 const CONTINUATION: usize = 2;
@@ -104,7 +105,7 @@ impl Linkage {
                 }
             }
             let worst = c.amax();
-            if worst <= LEG_TOLERANCE * 1e-3 {
+            if worst <= LEG_TOLERANCE * 1e-6 {
                 return Ok((r, p));
             }
             // minimum-norm step, regularised: where the tile is symmetric (phi = 0, the two
