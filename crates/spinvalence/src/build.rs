@@ -289,7 +289,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     finish(&bar);
     let solved = solved.map_err(|e| anyhow!("{}: primary solve: {e}", cfg.target))?;
     let primary_s = t1.elapsed().as_secs_f64();
-    let min_overlap = cfg.primary.min_overlap(cfg.profile.thickness)?;
+    let min_overlap = cfg.primary.min_overlap(&cfg.profile)?;
     if let Err(short) = weldable(&solved, min_overlap, &cfg) {
         // on a hub mesh that met its goals the parameters are to blame: nothing is written;
         // on one that did not, short laps are one more unmet goal, and everything is written
@@ -308,6 +308,15 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     for (name, text) in &stage.drawings {
         strips_dir.write(name, text)?;
     }
+    // the parts as cut, folded at their necks into the solved poses (`spinvalence check`)
+    let fold = sv_strips::fold_check(
+        &frame,
+        &stage.file,
+        &sv_strips::FoldLimits {
+            min_overlap,
+            ..sv_strips::FoldLimits::for_profile(&cfg.profile)
+        },
+    );
     let strips_s = t2.elapsed().as_secs_f64();
 
     let t3 = Instant::now();
@@ -409,6 +418,33 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
                 .join(", "),
         ]);
         output::print_out(&output::table(&rows))?;
+        output::print_out(&format!(
+            "fold check of the parts as cut (spinvalence check {}):\n{}",
+            cfg.out.display(),
+            crate::check::render(&fold)
+        ))?;
+    }
+    let failed: Vec<String> = fold
+        .rows
+        .iter()
+        .filter(|r| !r.ok)
+        .map(|r| {
+            format!(
+                "{} {} (limit {}) at {}",
+                r.name,
+                number(r.worst),
+                number(r.limit),
+                r.at
+            )
+        })
+        .collect();
+    if !failed.is_empty() {
+        eprintln!(
+            "warning: fold check: {} of {} rows fail on the parts as cut: {}",
+            failed.len(),
+            fold.rows.len(),
+            failed.join("; ")
+        );
     }
     Ok(Outcome {
         unmet: report.unmet.clone(),

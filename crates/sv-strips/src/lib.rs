@@ -33,6 +33,7 @@
 mod drc;
 mod error;
 mod file;
+mod fold;
 mod params;
 mod plane;
 mod profile;
@@ -42,6 +43,7 @@ mod tiles;
 pub use drc::{check_profile, DrcRule, Violation, DRC_ARC_TOLERANCE};
 pub use error::StripsError;
 pub use file::{FlatTile, PinRecord, StripRecord, StripsFile, StripsParams, STRIPS_FORMAT};
+pub use fold::{fold_check, FoldLimits};
 pub use params::{
     ProfileParams, SplitRule, StripDirection, StripOptions, DEFAULT_SHEET_LENGTH,
     DEFAULT_SHEET_MARGIN, MIN_INSIDE_RADIUS,
