@@ -20,6 +20,8 @@ mod check;
 mod cli;
 #[path = "e2e/dxf_inputs.rs"]
 mod dxf_inputs;
+#[path = "e2e/etch.rs"]
+mod etch;
 #[path = "e2e/fold.rs"]
 mod fold;
 #[path = "e2e/hygiene.rs"]

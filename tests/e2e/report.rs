@@ -261,7 +261,7 @@ fn every_summary_figure_is_recomputed_from_the_output_files() {
 }
 
 /// Split CSV text (RFC 4180) into rows of fields.
-fn parse_csv(text: &str) -> Vec<Vec<String>> {
+pub(crate) fn parse_csv(text: &str) -> Vec<Vec<String>> {
     let mut rows = Vec::new();
     let mut row = Vec::new();
     let mut field = String::new();
@@ -316,7 +316,8 @@ fn bill_of_materials_has_one_row_per_strip() {
             "cut_length_mm",
             "pierces",
             "units",
-            "unit_labels"
+            "unit_labels",
+            "hub_face"
         ]
     );
     let frame = read_json(&out_dir.join("frame.json"));
@@ -330,7 +331,7 @@ fn bill_of_materials_has_one_row_per_strip() {
     assert_eq!(rows.len(), 1 + list.len());
     let mut seen = HashSet::new();
     for (row, strip) in rows[1..].iter().zip(list) {
-        assert_eq!(row.len(), 13, "{row:?}");
+        assert_eq!(row.len(), 14, "{row:?}");
         let id = strip["id"].as_str().unwrap();
         assert_eq!(row[0], id);
         assert!(seen.insert(id.to_string()));

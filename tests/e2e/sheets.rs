@@ -22,7 +22,7 @@ use crate::util::{dxf_entities, num, read_json, Dir, DxfEntity};
 const CHORD: f64 = 0.01;
 
 /// Points of a closed polyline with bulges, arcs replaced by chords within [`CHORD`].
-fn flatten(v: &[[f64; 3]]) -> Vec<[f64; 2]> {
+pub(crate) fn flatten(v: &[[f64; 3]]) -> Vec<[f64; 2]> {
     let mut out = Vec::new();
     for i in 0..v.len() {
         let (a, b) = (v[i], v[(i + 1) % v.len()]);

@@ -155,6 +155,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
                         holes: p.holes,
                     },
                     etch: p.etch,
+                    labels: Vec::new(),
                 }));
                 left_out.extend(read.rejected.into_iter().map(|e| LeftOut {
                     part: name.clone(),

@@ -3,17 +3,18 @@
 //! Per placed part, in placement order: its inside contours (`INSIDE`), then its outside
 //! contour (`OUTSIDE`), each a closed LWPOLYLINE with bulges moved by the placement (arcs
 //! stay arcs, nothing is offset: the CAM applies the kerf), each followed by its suggested
-//! pierce point (a `POINT` on `INFO`) in scrap; then the part's etching (`ETCH`) and its
-//! label (`TEXT` on `INFO`). The sheet outline, the sheet title and the reusable offcut
+//! pierce point (a `POINT` on `INFO`) in scrap; then the part's etching (`ETCH`: marks moved
+//! with the part, labels moved and turned to read upright) and its label (`TEXT` on
+//! `INFO`). The sheet outline, the sheet title and the reusable offcut
 //! are on `INFO` too.
 
 use sv_dxf::{Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
 use sv_geom::planar::{bbox, point_in_polygon, polygon_area};
 use sv_geom::Contour;
-use sv_nest::{NestReport, Part};
-use sv_strips::{FlatStrip, StripProfile};
+use sv_nest::{NestReport, Part, PartPlacement};
+use sv_strips::{FlatStrip, Label, StripProfile};
 
-use crate::strip::etch_strokes;
+use crate::strip::{label_strokes, mark_strokes};
 
 /// Chord tolerance (mm) for the pierce-point search.
 const FLATTEN: f64 = 0.05;
@@ -24,8 +25,12 @@ const FLATTEN: f64 = 0.05;
 pub struct SheetPart {
     /// The cut contours (`part.id` is the `strip` of the placements).
     pub part: Part,
-    /// Etched open polylines (labels, fold marks).
+    /// Etched open polylines moved with the part as they are (fold marks, face marks; a
+    /// DXF part read by `spinvalence nest` has all its etching here).
     pub etch: Vec<Vec<[f64; 2]>>,
+    /// Etched labels, moved with the part and turned to read upright on the sheet
+    /// ([`Label::placed`]).
+    pub labels: Vec<Label>,
 }
 
 impl SheetPart {
@@ -34,12 +39,33 @@ impl SheetPart {
         Self {
             part,
             etch: Vec::new(),
+            labels: Vec::new(),
         }
+    }
+
+    /// What this part etches where `placement` puts it on a sheet, as open polylines.
+    fn etch_on_sheet(&self, placement: &PartPlacement) -> Vec<Vec<[f64; 2]>> {
+        let rotation = placement.rotation_deg.to_radians();
+        let (s, c) = rotation.sin_cos();
+        let t = placement.translation;
+        let mut out: Vec<Vec<[f64; 2]>> = self
+            .etch
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .map(|p| [c * p[0] - s * p[1] + t[0], s * p[0] + c * p[1] + t[1]])
+                    .collect()
+            })
+            .collect();
+        let labels: Vec<Label> = self.labels.iter().map(|l| l.placed(rotation, t)).collect();
+        out.extend(label_strokes(&labels));
+        out
     }
 }
 
-/// The nesting part of a profiled strip: outline, slots as holes, labels and fold marks as
-/// etching, in the strip's frame (the coordinates of `strips/ID.dxf` and `strips.json`).
+/// The nesting part of a profiled strip: outline, slots as holes, labels, fold marks and
+/// face marks as etching, in the strip's frame (the coordinates of `strips/ID.dxf` and
+/// `strips.json`).
 pub fn strip_sheet_part(strip: &FlatStrip, profile: &StripProfile) -> SheetPart {
     SheetPart {
         part: Part {
@@ -47,7 +73,8 @@ pub fn strip_sheet_part(strip: &FlatStrip, profile: &StripProfile) -> SheetPart 
             outer: profile.outline.clone(),
             holes: profile.cuts.clone(),
         },
-        etch: etch_strokes(profile),
+        etch: mark_strokes(profile),
+        labels: profile.labels.clone(),
     }
 }
 
@@ -369,19 +396,10 @@ pub fn sheet_dxf(
                     pl.strip
                 )
             })?;
-        let (s, c) = pl.rotation_deg.to_radians().sin_cos();
-        let t = pl.translation;
-        let moved: Vec<Vec<[f64; 2]>> = sp
-            .etch
-            .iter()
-            .map(|l| {
-                l.iter()
-                    .map(|p| [c * p[0] - s * p[1] + t[0], s * p[0] + c * p[1] + t[1]])
-                    .collect()
-            })
-            .collect();
-        placed.push(Placed::new(sp.part.transformed(pl.rotation_deg, t)));
-        etch.push(moved);
+        placed.push(Placed::new(
+            sp.part.transformed(pl.rotation_deg, pl.translation),
+        ));
+        etch.push(sp.etch_on_sheet(pl));
     }
     let offset = (report.sheet.spacing / 2.0).max(0.5);
     let mut d = Drawing::new();
@@ -457,6 +475,48 @@ pub fn sheet_dxf(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::font::text_strokes;
+
+    #[test]
+    fn labels_turned_upside_down_by_the_nest_are_turned_back_marks_are_not() {
+        let label = Label {
+            text: "A01-02".into(),
+            at: [100.0, 40.0],
+            angle: 0.1,
+            height: 20.0,
+        };
+        let mark = vec![[90.0, 10.0], [110.0, 12.0]];
+        let part = SheetPart {
+            part: Part {
+                id: "A01".into(),
+                outer: Contour::polygon(&[[0.0, 0.0], [200.0, 0.0], [200.0, 80.0]]),
+                holes: Vec::new(),
+            },
+            etch: vec![mark],
+            labels: vec![label.clone()],
+        };
+        let placement = |rotation_deg: f64| PartPlacement {
+            strip: "A01".into(),
+            translation: [500.0, 300.0],
+            rotation_deg,
+        };
+        // a half turn: the mark turns with the part, the label reads along 0.1 rad again
+        // about its centre moved with the part
+        let etch = part.etch_on_sheet(&placement(180.0));
+        let close = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9;
+        assert!(close(etch[0][0], [410.0, 290.0]) && close(etch[0][1], [390.0, 288.0]));
+        let want = text_strokes("A01-02", [400.0, 260.0], 0.1, 20.0);
+        assert_eq!(etch.len(), 1 + want.len());
+        for (got, want) in etch[1..].iter().zip(&want) {
+            assert!(got.iter().zip(want).all(|(&a, &b)| close(a, b)), "{got:?}");
+        }
+        // unturned: the label as the strip etches it, moved
+        let etch = part.etch_on_sheet(&placement(0.0));
+        let want = text_strokes("A01-02", [600.0, 340.0], 0.1, 20.0);
+        for (got, want) in etch[1..].iter().zip(&want) {
+            assert!(got.iter().zip(want).all(|(&a, &b)| close(a, b)), "{got:?}");
+        }
+    }
 
     #[test]
     fn file_stem_names_sheet_size_and_thickness() {

@@ -1,8 +1,9 @@
-//! The DXF of one profiled strip: outline (`OUTSIDE`), slots (`INSIDE`), labels and fold
-//! marks etched in the single-stroke font (`ETCH`), nominal tiles, pins and title (`INFO`).
+//! The DXF of one profiled strip: outline (`OUTSIDE`), slots (`INSIDE`), labels in the
+//! single-stroke font, fold marks and face marks etched (`ETCH`), nominal tiles, pins and
+//! title (`INFO`).
 
 use sv_dxf::{Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
-use sv_strips::{FlatStrip, StripProfile};
+use sv_strips::{FlatStrip, Label, StripProfile};
 
 use crate::font::text_strokes;
 use crate::ShopConvention;
@@ -46,13 +47,26 @@ pub fn strip_dxf(strip: &FlatStrip, profile: &StripProfile) -> String {
     d.finish()
 }
 
-/// What a strip etches (labels and fold marks), as open polylines in the strip's frame.
+/// What a strip etches (labels, fold marks and face marks), as open polylines in the
+/// strip's frame.
 pub fn etch_strokes(profile: &StripProfile) -> Vec<Vec<[f64; 2]>> {
-    let mut out: Vec<Vec<[f64; 2]>> = profile
-        .labels
+    let mut out = label_strokes(&profile.labels);
+    out.extend(mark_strokes(profile));
+    out
+}
+
+/// The strokes of etched labels.
+pub(crate) fn label_strokes(labels: &[Label]) -> Vec<Vec<[f64; 2]>> {
+    labels
         .iter()
         .flat_map(|l| text_strokes(&l.text, l.at, l.angle, l.height))
-        .collect();
-    out.extend(profile.fold_marks.iter().map(|f| f.to_vec()));
+        .collect()
+}
+
+/// What a strip etches besides its labels (fold marks, face marks): strokes that read the
+/// same however the part is turned.
+pub(crate) fn mark_strokes(profile: &StripProfile) -> Vec<Vec<[f64; 2]>> {
+    let mut out: Vec<Vec<[f64; 2]>> = profile.fold_marks.iter().map(|f| f.to_vec()).collect();
+    out.extend(profile.face_marks.iter().flat_map(|m| m.strokes()));
     out
 }

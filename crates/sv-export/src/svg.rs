@@ -1,11 +1,12 @@
-//! SVG drawing of one strip for the fabricator: part with its cuts, etched labels and fold
-//! marks, nominal tiles and pins, a scale bar, and a title with the strip id and size.
+//! SVG drawing of one strip for the fabricator: part with its cuts, etched labels, fold
+//! marks and face marks, nominal tiles and pins, a scale bar, and a title with the strip id
+//! and size.
 //! Drawn 1:1 in mm (`width`/`height` in mm), y up as in the DXF.
 
 use std::fmt::Write;
 
 use sv_geom::Contour;
-use sv_strips::{FlatStrip, ProfileParams, StripProfile};
+use sv_strips::{FlatStrip, HubFace, ProfileParams, StripProfile};
 
 use crate::font::text_strokes;
 
@@ -100,7 +101,7 @@ pub fn strip_svg(strip: &FlatStrip, profile: &StripProfile, params: &ProfilePara
     );
     let _ = writeln!(
         s,
-        r##"<text x="{margin}" y="52" font-family="sans-serif" font-size="12">t = {} mm · kerf {} mm (nominal contours, CAM compensates) · net area {:.3} m² · <tspan fill="black">cut</tspan> · <tspan fill="#2a7">etch</tspan> · <tspan fill="#d22">fold</tspan> · <tspan fill="#999">tile / pin (info)</tspan></text>"##,
+        r##"<text x="{margin}" y="52" font-family="sans-serif" font-size="12">t = {} mm · kerf {} mm (nominal contours, CAM compensates) · net area {:.3} m² · <tspan fill="black">cut</tspan> · <tspan fill="#2a7">etch</tspan> · <tspan fill="#d22">fold</tspan> · <tspan fill="#999">tile / pin (info)</tspan> · seen from the etched face: <tspan fill="#2a7">⊙ hub out of the etched face (towards you), ⊗ out of the back</tspan></text>"##,
         params.thickness,
         params.kerf,
         profile.area / 1e6
@@ -154,6 +155,25 @@ pub fn strip_svg(strip: &FlatStrip, profile: &StripProfile, params: &ProfilePara
             escape(&l.text)
         );
         for st in text_strokes(&l.text, l.at, l.angle, l.height) {
+            let _ = writeln!(
+                s,
+                r##"<polyline points="{}" fill="none" stroke="#2a7" stroke-width="1.2" stroke-linecap="round" stroke-linejoin="round"/>"##,
+                polyline(&st)
+            );
+        }
+        s.push_str("</g>\n");
+    }
+    for (m, &u) in profile.face_marks.iter().zip(&strip.units) {
+        let why = match m.face {
+            HubFace::Etched => "out of the etched face, towards you",
+            HubFace::Back => "out of the back, away from you",
+        };
+        let _ = writeln!(
+            s,
+            r#"<g class="face-mark" data-unit="{u}" data-face="{}"><title>hub comes {why}</title>"#,
+            m.face.name()
+        );
+        for st in m.strokes() {
             let _ = writeln!(
                 s,
                 r##"<polyline points="{}" fill="none" stroke="#2a7" stroke-width="1.2" stroke-linecap="round" stroke-linejoin="round"/>"##,

@@ -3,11 +3,11 @@
 
 use std::fmt::Write;
 
-use crate::summary::{strip_cut_length, strip_pierces};
+use crate::summary::{strip_cut_length, strip_hub_face, strip_pierces};
 use crate::{ReportError, ReportInput};
 
 /// The columns of `bom.csv`, in order.
-pub const BOM_COLUMNS: [&str; 13] = [
+pub const BOM_COLUMNS: [&str; 14] = [
     "strip",
     "sheet",
     "sheet_file",
@@ -21,12 +21,14 @@ pub const BOM_COLUMNS: [&str; 13] = [
     "pierces",
     "units",
     "unit_labels",
+    "hub_face",
 ];
 
 /// The bill of materials: per strip its id, sheet number and sheet file, placement on the
 /// sheet (`x_mm`, `y_mm`, `rotation_deg`: `p_sheet = R(rotation) p_strip + (x, y)`, empty
 /// without nesting), bounding size, net area, cut length, pierces, number of units and the
-/// unit labels (space separated, in strip order).
+/// unit labels (space separated, in strip order), and the face of the part its hubs come
+/// out of ([`strip_hub_face`]).
 pub fn bom_csv(input: &ReportInput<'_>) -> Result<String, ReportError> {
     input.validate()?;
     let placements = input.placements()?;
@@ -64,6 +66,7 @@ pub fn bom_csv(input: &ReportInput<'_>) -> Result<String, ReportError> {
                 strip_pierces(strip).to_string(),
                 strip.units.len().to_string(),
                 labels.join(" "),
+                strip_hub_face(strip, |u| input.frame.units[u].id.clone()),
             ]
             .into_iter(),
         );

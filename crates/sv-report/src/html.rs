@@ -12,7 +12,7 @@ use sv_geom::Point3;
 
 use crate::plot::{escape, histogram, short, top_view, Histogram, TopView, COLOUR_MAP};
 use crate::sheets::sheet_svg;
-use crate::summary::{strip_cut_length, strip_pierces, Summary, STEEL_DENSITY};
+use crate::summary::{strip_cut_length, strip_hub_face, strip_pierces, Summary, STEEL_DENSITY};
 use crate::{ReportError, ReportInput};
 
 const CSS: &str = include_str!("report.css");
@@ -486,7 +486,9 @@ fn strips_section(input: &ReportInput<'_>) -> Result<String, ReportError> {
         "<section id=\"strips\"><h2>Strips</h2><p class=\"muted\">The same rows as <code>bom.csv</code>.</p><table>\
          <tr><th>strip</th><th class=\"num\">units</th><th>first - last unit</th><th class=\"num\">length x width (mm)</th>\
          <th class=\"num\">area (m\u{00b2})</th><th class=\"num\">cut length (m)</th><th class=\"num\">pierces</th>\
-         <th class=\"num\">largest bend / twist (deg)</th><th>sheet</th></tr>\n",
+         <th class=\"num\">largest bend / twist (deg)</th><th>sheet</th>\
+         <th title=\"the face of the part the hubs come out of: etched (the face the marks are on; \
+         each hub carries a circle with a dot) or back (a circle with a cross)\">hub face</th></tr>\n",
     );
     for s in &input.strips.strips {
         let first = s
@@ -506,7 +508,7 @@ fn strips_section(input: &ReportInput<'_>) -> Result<String, ReportError> {
         let _ = writeln!(
             h,
             "<tr data-strip=\"{}\"><td>{}</td><td class=\"num\">{}</td><td>{} - {}</td><td class=\"num\">{:.0} x {:.0}</td>\
-             <td class=\"num\">{:.3}</td><td class=\"num\">{:.2}</td><td class=\"num\">{}</td><td class=\"num\">{:.1} / {:.1}</td><td>{}</td></tr>",
+             <td class=\"num\">{:.3}</td><td class=\"num\">{:.2}</td><td class=\"num\">{}</td><td class=\"num\">{:.1} / {:.1}</td><td>{}</td><td class=\"hub-face\">{}</td></tr>",
             escape(&s.id),
             escape(&s.id),
             s.units.len(),
@@ -519,7 +521,8 @@ fn strips_section(input: &ReportInput<'_>) -> Result<String, ReportError> {
             strip_pierces(s),
             bend.to_degrees(),
             twist.to_degrees(),
-            sheet
+            sheet,
+            escape(&strip_hub_face(s, |u| input.frame.units[u].id.clone()))
         );
     }
     h.push_str("</table></section>\n");

@@ -56,4 +56,4 @@ pub use bom::{bom_csv, csv_field, BOM_COLUMNS};
 pub use error::ReportError;
 pub use html::{report_html, CONTENT_SECURITY_POLICY, VIEW_BACKGROUND};
 pub use input::{NestInput, Placement, ReportInput};
-pub use summary::{strip_cut_length, strip_pierces, Summary, STEEL_DENSITY};
+pub use summary::{strip_cut_length, strip_hub_face, strip_pierces, Summary, STEEL_DENSITY};

@@ -3,7 +3,7 @@
 use std::collections::HashSet;
 
 use serde::Serialize;
-use sv_strips::StripRecord;
+use sv_strips::{HubFace, StripRecord};
 
 use crate::ReportInput;
 
@@ -85,4 +85,88 @@ pub fn strip_cut_length(strip: &StripRecord) -> f64 {
 /// Pierces of one strip: one per closed cut contour.
 pub fn strip_pierces(strip: &StripRecord) -> usize {
     1 + strip.cuts.len()
+}
+
+/// The face of a strip its hubs come out of (`strips.json` `flat[].hub_face`): `etched` or
+/// `back` when all its units agree, else `mixed` with the units of each face by `label`
+/// (`mixed: etched A01-01 A01-02; back A01-03`); empty when the file does not say.
+pub fn strip_hub_face(strip: &StripRecord, label: impl Fn(usize) -> String) -> String {
+    let faces: Vec<Option<HubFace>> = strip.flat.iter().map(|t| t.hub_face).collect();
+    match faces.first() {
+        None | Some(None) => return String::new(),
+        Some(&Some(first)) if faces.iter().all(|&f| f == Some(first)) => {
+            return first.name().to_string()
+        }
+        _ => {}
+    }
+    let units = |face: HubFace| -> String {
+        strip
+            .flat
+            .iter()
+            .filter(|t| t.hub_face == Some(face))
+            .map(|t| label(t.unit))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let mut parts: Vec<String> = [HubFace::Etched, HubFace::Back]
+        .into_iter()
+        .map(|f| (f, units(f)))
+        .filter(|(_, u)| !u.is_empty())
+        .map(|(f, u)| format!("{} {u}", f.name()))
+        .collect();
+    let unknown = strip.flat.iter().filter(|t| t.hub_face.is_none()).count();
+    if unknown > 0 {
+        parts.push(format!("{unknown} unknown"));
+    }
+    format!("mixed: {}", parts.join("; "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sv_strips::{Contour, FlatTile};
+
+    fn strip(faces: &[Option<HubFace>]) -> StripRecord {
+        StripRecord {
+            id: "A01".into(),
+            units: (0..faces.len()).collect(),
+            flat: faces
+                .iter()
+                .enumerate()
+                .map(|(unit, &hub_face)| FlatTile {
+                    unit,
+                    primary: [[0.0; 2]; 4],
+                    hub_face,
+                })
+                .collect(),
+            outline: Contour::polygon(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]),
+            cuts: Vec::new(),
+            area_mm2: 0.0,
+            size_mm: [1.0, 1.0],
+            cut_units: Vec::new(),
+            pins: Vec::new(),
+            labels: Vec::new(),
+            fold_marks: Vec::new(),
+            face_marks: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_strip_names_its_hub_face_or_which_units_have_which() {
+        let label = |u: usize| format!("A01-{:02}", u + 1);
+        let (e, b) = (Some(HubFace::Etched), Some(HubFace::Back));
+        assert_eq!(strip_hub_face(&strip(&[e, e, e]), label), "etched");
+        assert_eq!(strip_hub_face(&strip(&[b, b]), label), "back");
+        assert_eq!(
+            strip_hub_face(&strip(&[e, b, e]), label),
+            "mixed: etched A01-01 A01-03; back A01-02"
+        );
+        assert_eq!(
+            strip_hub_face(&strip(&[b, None]), label),
+            "mixed: back A01-01; 1 unknown"
+        );
+        // a strips.json that does not say
+        assert_eq!(strip_hub_face(&strip(&[None, None]), label), "");
+        assert_eq!(strip_hub_face(&strip(&[]), label), "");
+    }
 }

@@ -2,7 +2,10 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Contour, FlatStrip, Label, ProfileParams, SplitRule, StripOptions, StripProfile};
+use crate::{
+    Contour, FaceMark, FlatStrip, HubFace, Label, ProfileParams, SplitRule, StripOptions,
+    StripProfile,
+};
 
 /// The `format` tag of a strips file.
 pub const STRIPS_FORMAT: &str = "spin-valence/strips";
@@ -64,6 +67,9 @@ pub struct StripRecord {
     pub labels: Vec<Label>,
     /// Extra: etched fold marks.
     pub fold_marks: Vec<[[f64; 2]; 2]>,
+    /// Extra: per unit, the etched mark of the face its hub comes out of.
+    #[serde(default)]
+    pub face_marks: Vec<FaceMark>,
 }
 
 /// A flat tile: `primary` corners in frame order.
@@ -73,6 +79,10 @@ pub struct FlatTile {
     pub unit: usize,
     /// Corners `[x, y]` (mm), frame order.
     pub primary: [[f64; 2]; 4],
+    /// Extra: the face of the part the unit's hub comes out of: `etched` (`+z`, the face
+    /// seen in the DXF) or `back`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hub_face: Option<HubFace>,
 }
 
 /// A joint between consecutive units.
@@ -111,9 +121,11 @@ impl StripsFile {
                     .units
                     .iter()
                     .zip(&s.tiles)
-                    .map(|(&unit, t)| FlatTile {
+                    .zip(&s.hub_faces)
+                    .map(|((&unit, t), &face)| FlatTile {
                         unit,
                         primary: t.map(|q| [q.x, q.y]),
+                        hub_face: Some(face),
                     })
                     .collect(),
                 outline: p.outline.clone(),
@@ -135,6 +147,7 @@ impl StripsFile {
                     .collect(),
                 labels: p.labels.clone(),
                 fold_marks: p.fold_marks.clone(),
+                face_marks: p.face_marks.clone(),
             })
             .collect();
         Self {

@@ -8,7 +8,10 @@
 //!   sheet or overlap itself, and report bend and twist per [`Pin`].
 //! - [`unit_labels`] / [`apply_labels`]: `A03-07` labels for frame.json `id` / `strip`.
 //! - [`profile_strip`]: the cut profile ([`StripProfile`]): rounded outline with bridges,
-//!   four hook slots per unit, fold marks and labels, as [`Contour`]s with arcs.
+//!   four hook slots per unit, fold marks, upright labels and face marks, as [`Contour`]s
+//!   with arcs.
+//! - [`hub_face`] / [`HubFace`] / [`FaceMark`]: which face of the flat part each hub comes
+//!   out of (`+z`, the etched face, or the back) and the mark etched for it.
 //! - [`check_profile`]: the design-rule check ([`Violation`]).
 //! - [`StripsFile`]: `strips.json` v1.
 //!
@@ -32,6 +35,7 @@
 
 mod drc;
 mod error;
+mod face;
 mod file;
 mod fold;
 mod params;
@@ -42,6 +46,7 @@ mod tiles;
 
 pub use drc::{check_profile, DrcRule, Violation, DRC_ARC_TOLERANCE};
 pub use error::StripsError;
+pub use face::{hub_face, FaceMark, HubFace};
 pub use file::{FlatTile, PinRecord, StripRecord, StripsFile, StripsParams, STRIPS_FORMAT};
 pub use fold::{fold_check, FoldLimits};
 pub use params::{

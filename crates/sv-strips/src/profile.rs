@@ -8,7 +8,7 @@ use sv_geom::{Contour, Point2, Vector2};
 use sv_unit::UnitLayout;
 
 use crate::plane::cross;
-use crate::{FlatStrip, ProfileParams, StripsError};
+use crate::{FaceMark, FlatStrip, HubFace, ProfileParams, StripsError};
 
 /// A text to etch: centred at `at`, baseline along `angle` (rad), cap height `height` (mm).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -23,6 +23,41 @@ pub struct Label {
     pub height: f64,
 }
 
+/// The direction `angle` (rad) or its opposite, whichever reads upright: in (-90, 90]
+/// degrees of +x (straight up reads bottom to top).
+pub fn upright(angle: f64) -> f64 {
+    use std::f64::consts::{FRAC_PI_2, PI, TAU};
+    // (-pi, pi]
+    let a = angle.rem_euclid(TAU);
+    let a = if a > PI { a - TAU } else { a };
+    if a > FRAC_PI_2 {
+        a - PI
+    } else if a <= -FRAC_PI_2 {
+        a + PI
+    } else {
+        a
+    }
+}
+
+impl Label {
+    /// This label where the rigid motion `p -> R(rotation) p + translation` (rotation in
+    /// rad, as a nest placement) puts it, turned half round about its centre where that
+    /// reads upright ([`upright`]): the same box, the same text, never upside down.
+    pub fn placed(&self, rotation: f64, translation: [f64; 2]) -> Label {
+        let (s, c) = rotation.sin_cos();
+        let [x, y] = self.at;
+        Label {
+            text: self.text.clone(),
+            at: [
+                c * x - s * y + translation[0],
+                s * x + c * y + translation[1],
+            ],
+            angle: upright(self.angle + rotation),
+            height: self.height,
+        }
+    }
+}
+
 /// The cut profile of one strip, in the strip's flat frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StripProfile {
@@ -34,8 +69,11 @@ pub struct StripProfile {
     pub cut_units: Vec<usize>,
     /// Fold marks to etch across every neck and bridge (segments, mm).
     pub fold_marks: Vec<[[f64; 2]; 2]>,
-    /// One label per unit (`A03-07`) on its hub, plus none for the strip.
+    /// One label per unit (`A03-07`) on its hub, upright in the strip frame, plus none for
+    /// the strip.
     pub labels: Vec<Label>,
+    /// One mark per unit on its hub, beside its label: which face the hub comes out of.
+    pub face_marks: Vec<FaceMark>,
     /// Nominal flat expanded primary tiles (closed quads) for the never-cut info layer.
     pub tiles: Vec<[[f64; 2]; 4]>,
     /// Net area of the part (mm^2): outline minus cuts.
@@ -101,6 +139,7 @@ struct UnitCut {
     slots: Vec<Polyline<f64>>,
     folds: Vec<[[f64; 2]; 2]>,
     label: Label,
+    mark: FaceMark,
 }
 
 fn unit_error(strip: &str, unit: usize, why: String) -> StripsError {
@@ -116,6 +155,7 @@ fn unit_cuts(
     strip: &str,
     unit: usize,
     label: String,
+    face: HubFace,
     tile: &[Point2; 4],
     p: &ProfileParams,
 ) -> Result<UnitCut, StripsError> {
@@ -140,13 +180,62 @@ fn unit_cuts(
     let label = Label {
         text: label,
         at: p2a(centre),
-        angle: d0.y.atan2(d0.x),
+        angle: upright(d0.y.atan2(d0.x)),
         height,
     };
+    let mark =
+        face_mark(&hub, &label, face, p.min_web()).map_err(|why| unit_error(strip, unit, why))?;
     Ok(UnitCut {
         slots,
         folds,
         label,
+        mark,
+    })
+}
+
+/// Smallest radius of a face mark (mm): below it a plasma etch is a blot.
+const MIN_FACE_MARK_RADIUS: f64 = 3.0;
+
+/// The face mark of a unit: a circle of half the label's height centred under the label
+/// (in its upright reading), half a radius below the text; smaller where the hub plate
+/// (`hub`, counter-clockwise) would not hold it `margin` inside every side.
+fn face_mark(
+    hub: &[Point2; 4],
+    label: &Label,
+    face: HubFace,
+    margin: f64,
+) -> Result<FaceMark, String> {
+    let up = Vector2::new(-label.angle.sin(), label.angle.cos());
+    let c0 = Point2::new(label.at[0], label.at[1]);
+    let half = label.height / 2.0;
+    // centre at c0 - up (half + 1.5 r); side i (inward normal n) holds it when
+    // n.(c0 - hub_i) - (half + 1.5 r) n.up >= r + margin
+    let sides: Vec<(f64, f64)> = (0..4)
+        .map(|i| {
+            let d = (hub[(i + 1) % 4] - hub[i]).normalize();
+            let n = Vector2::new(-d.y, d.x);
+            (n.dot(&(c0 - hub[i])), n.dot(&up))
+        })
+        .collect();
+    let radius = sides
+        .iter()
+        .filter(|&&(_, nu)| 1.0 + 1.5 * nu > 0.0)
+        .map(|&(depth, nu)| (depth - half * nu - margin) / (1.0 + 1.5 * nu))
+        .fold(half, f64::min);
+    let at = c0 - up * (half + 1.5 * radius);
+    let fits = sides
+        .iter()
+        .all(|&(depth, nu)| depth - (half + 1.5 * radius) * nu >= radius + margin - 1e-9);
+    if !(radius >= MIN_FACE_MARK_RADIUS && fits) {
+        return Err(format!(
+            "hub plate too small for a face mark of radius {MIN_FACE_MARK_RADIUS} mm \
+             {margin} mm inside it"
+        ));
+    }
+    Ok(FaceMark {
+        at: p2a(at),
+        radius,
+        face,
     })
 }
 
@@ -200,18 +289,26 @@ pub fn profile_strip(
     let mut cut_units = Vec::new();
     let mut fold_marks = Vec::new();
     let mut out_labels = Vec::new();
+    let mut face_marks = Vec::new();
     let mut plates = Vec::with_capacity(strip.units.len());
     for (j, (&u, tile)) in strip.units.iter().zip(&strip.tiles).enumerate() {
         let q = inset(tile, half)
             .ok_or_else(|| unit_error(&strip.id, u, "tile smaller than the joint slot".into()))?;
         let label = labels.get(j).cloned().unwrap_or_default();
-        let cut = unit_cuts(&strip.id, u, label, tile, params)?;
+        let face = *strip
+            .hub_faces
+            .get(j)
+            .ok_or_else(|| StripsError::Internal {
+                why: format!("strip {}: unit {u} has no hub face", strip.id),
+            })?;
+        let cut = unit_cuts(&strip.id, u, label, face, tile, params)?;
         for sl in &cut.slots {
             cuts.push(Contour::from_pline(sl));
             cut_units.push(u);
         }
         fold_marks.extend(cut.folds);
         out_labels.push(cut.label);
+        face_marks.push(cut.mark);
         plates.push(q);
     }
     for (j, q) in plates.iter().enumerate() {
@@ -272,6 +369,7 @@ pub fn profile_strip(
         cut_units,
         fold_marks,
         labels: out_labels,
+        face_marks,
         tiles: strip.tiles.iter().map(|t| t.map(p2a)).collect(),
         area,
     })
@@ -300,4 +398,99 @@ fn union(
         p.invert_direction_mut();
     }
     Ok(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    #[test]
+    fn upright_turns_every_direction_into_minus_90_to_90_degrees() {
+        for k in -40..=40 {
+            let a = k as f64 * 0.1;
+            let u = upright(a);
+            assert!(u > -FRAC_PI_2 && u <= FRAC_PI_2 + 1e-12, "{a} -> {u}");
+            // the same line: a or a + pi, modulo a turn
+            let d = (u - a).rem_euclid(PI);
+            assert!(d < 1e-9 || PI - d < 1e-9, "{a} -> {u}");
+        }
+        assert_eq!(upright(0.3), 0.3);
+        assert!((upright(PI - 0.3) + 0.3).abs() < 1e-12);
+        assert!((upright(-FRAC_PI_2) - FRAC_PI_2).abs() < 1e-12);
+        assert!((upright(FRAC_PI_2) - FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_placed_label_moves_with_the_part_and_reads_upright() {
+        let l = Label {
+            text: "A01-02".into(),
+            at: [10.0, 0.0],
+            angle: 0.2,
+            height: 20.0,
+        };
+        // a half turn about the origin and a shift: same box, not upside down
+        let p = l.placed(PI, [100.0, 50.0]);
+        assert!((p.at[0] - 90.0).abs() < 1e-9 && (p.at[1] - 50.0).abs() < 1e-9);
+        assert!((p.angle - 0.2).abs() < 1e-12);
+        assert_eq!((p.text.as_str(), p.height), ("A01-02", 20.0));
+        // a quarter turn keeps an upright label upright
+        assert!((l.placed(FRAC_PI_2, [0.0, 0.0]).angle - (0.2 + FRAC_PI_2 - PI)).abs() < 1e-12);
+    }
+
+    /// Distance from `p` inside the counter-clockwise quad `q` to its nearest side.
+    fn depth(q: &[Point2; 4], p: Point2) -> f64 {
+        (0..4)
+            .map(|i| cross(&(q[(i + 1) % 4] - q[i]).normalize(), &(p - q[i])))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn the_face_mark_sits_under_the_label_inside_the_hub_plate() {
+        // a skewed hub plate
+        let hub = [
+            Point2::new(0.0, 0.0),
+            Point2::new(200.0, 30.0),
+            Point2::new(230.0, 220.0),
+            Point2::new(20.0, 190.0),
+        ];
+        let label = Label {
+            text: "A01-01".into(),
+            at: [115.0, 110.0],
+            angle: 0.15,
+            height: 25.0,
+        };
+        let m = face_mark(&hub, &label, HubFace::Back, 3.75).unwrap();
+        assert_eq!((m.radius, m.face), (12.5, HubFace::Back));
+        // half a radius below the text's lower edge, in the label's upright reading
+        let up = Vector2::new(-label.angle.sin(), label.angle.cos());
+        let c = Point2::new(m.at[0], m.at[1]);
+        let below = -(c - Point2::new(115.0, 110.0)).dot(&up);
+        assert!((below - (12.5 + 1.5 * 12.5)).abs() < 1e-9, "{below}");
+        assert!(depth(&hub, c) >= m.radius + 3.75);
+        // a narrow plate: the mark shrinks to stay a margin inside it
+        let narrow = [
+            Point2::new(0.0, 75.0),
+            Point2::new(200.0, 75.0),
+            Point2::new(200.0, 160.0),
+            Point2::new(0.0, 160.0),
+        ];
+        let label = Label {
+            angle: 0.0,
+            ..label
+        };
+        let m = face_mark(&narrow, &label, HubFace::Etched, 3.75).unwrap();
+        let c = Point2::new(m.at[0], m.at[1]);
+        assert!(m.radius < 12.5 && m.radius >= MIN_FACE_MARK_RADIUS, "{m:?}");
+        assert!(
+            (depth(&narrow, c) - (m.radius + 3.75)).abs() < 1e-9,
+            "{m:?}"
+        );
+        // no room at all: an error, not a mark on the cut
+        let label = Label {
+            at: [100.0, 90.0],
+            ..label
+        };
+        assert!(face_mark(&narrow, &label, HubFace::Etched, 3.75).is_err());
+    }
 }

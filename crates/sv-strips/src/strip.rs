@@ -3,8 +3,9 @@
 use sv_frame::FrameFile;
 use sv_geom::{segment_closest, Point2, Point3, Vector2, Vector3};
 
+use crate::face::quad_normal;
 use crate::plane::{convex_intersection_area, min_area_rect};
-use crate::{SplitRule, StripDirection, StripOptions, StripsError, TileSet};
+use crate::{HubFace, SplitRule, StripDirection, StripOptions, StripsError, TileSet};
 
 /// The joint between two consecutive units of a strip (a pinned connection, paper fig. 12).
 #[derive(Clone, Debug, PartialEq)]
@@ -36,6 +37,9 @@ pub struct FlatStrip {
     pub units: Vec<usize>,
     /// Flat expanded primary tile of each unit (frame corner order, counter-clockwise).
     pub tiles: Vec<[Point2; 4]>,
+    /// The face of the flat part each unit's hub comes out of (`+z`, the face seen from
+    /// above and etched, is [`HubFace::Etched`]).
+    pub hub_faces: Vec<HubFace>,
     /// `pins[j]` joins `units[j]` and `units[j + 1]`.
     pub pins: Vec<Pin>,
     /// Length and width of the bounding rectangle of the tiles (mm).
@@ -303,16 +307,11 @@ pub fn chains(tiles: &TileSet, direction: StripDirection) -> Vec<Vec<usize>> {
 fn flatten(q: &[Point3; 4]) -> [Point2; 4] {
     let c = q.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / 4.0;
     let e1 = (q[1] - q[0]).normalize();
-    let nrm = (q[2] - q[0]).cross(&(q[3] - q[1])).normalize();
-    let e2 = nrm.cross(&e1);
+    let e2 = quad_normal(q).cross(&e1);
     q.map(|p| {
         let d = p.coords - c;
         Point2::new(d.dot(&e1), d.dot(&e2))
     })
-}
-
-fn normal(q: &[Point3; 4]) -> Vector3 {
-    (q[2] - q[0]).cross(&(q[3] - q[1])).normalize()
 }
 
 /// A 2D rigid motion `x -> R x + t`.
@@ -365,7 +364,7 @@ fn place_next(
     let lpin = lc + (ld - lc) * cl.t;
     let mo = Motion::mapping(&lpin, &(ld - lc), &pin, &(-u));
     let placed = lg.map(|p| mo.apply(&p));
-    let (nf, ng) = (normal(tf), normal(tg));
+    let (nf, ng) = (quad_normal(tf), quad_normal(tg));
     let axis = (b - a).normalize();
     let bend = nf.cross(&ng).dot(&axis).atan2(nf.dot(&ng));
     let twist = (b - a)
@@ -464,7 +463,20 @@ pub fn unroll_tiles(
         .enumerate()
         .map(|(i, p)| {
             let id = strip_id(i)?;
-            Ok(normalise(id, p))
+            let faces = p
+                .units
+                .iter()
+                .map(|&u| {
+                    tiles
+                        .hub_faces
+                        .get(u)
+                        .copied()
+                        .ok_or(StripsError::Internal {
+                            why: format!("unit {u} has no hub face"),
+                        })
+                })
+                .collect::<Result<_, _>>()?;
+            Ok(normalise(id, p, faces))
         })
         .collect()
 }
@@ -550,7 +562,7 @@ fn split_chain(
 }
 
 /// Rotate and translate a piece so its minimum-area rectangle is axis-aligned, long side on x.
-fn normalise(id: String, p: Piece) -> FlatStrip {
+fn normalise(id: String, p: Piece, hub_faces: Vec<HubFace>) -> FlatStrip {
     let pts: Vec<Point2> = p.tiles.iter().flatten().copied().collect();
     let (angle, long, short) = min_area_rect(&pts);
     let (s, c) = (-angle).sin_cos();
@@ -569,6 +581,7 @@ fn normalise(id: String, p: Piece) -> FlatStrip {
         id,
         units: p.units,
         tiles: p.tiles.iter().map(|t| t.map(|q| tr(&q))).collect(),
+        hub_faces,
         pins: p
             .pins
             .into_iter()

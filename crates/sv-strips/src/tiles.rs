@@ -4,7 +4,7 @@
 use sv_frame::FrameFile;
 use sv_geom::{Point3, Vector3};
 
-use crate::StripsError;
+use crate::{hub_face, HubFace, StripsError};
 
 /// Expanded primary tiles of a frame and their neighbours.
 #[derive(Clone, Debug, PartialEq)]
@@ -14,6 +14,8 @@ pub struct TileSet {
     pub tiles: Vec<[Point3; 4]>,
     /// Per unit and side `k`: the unit across that side and its own side index facing back.
     pub across: Vec<[Option<(usize, usize)>; 4]>,
+    /// Per unit: the face of its flat tile the hub comes out of ([`hub_face`]).
+    pub hub_faces: Vec<HubFace>,
 }
 
 impl TileSet {
@@ -26,6 +28,7 @@ impl TileSet {
             });
         }
         let mut tiles = Vec::with_capacity(frame.units.len());
+        let mut hub_faces = Vec::with_capacity(frame.units.len());
         for (u, rec) in frame.units.iter().enumerate() {
             let p: [Point3; 4] = rec.primary.map(|c| Point3::new(c[0], c[1], c[2]));
             if p.iter().any(|q| !q.coords.iter().all(|x| x.is_finite())) {
@@ -41,6 +44,13 @@ impl TileSet {
                     why: format!("unit {u} has a degenerate primary tile"),
                 });
             }
+            let hub = rec.hub.map(|c| Point3::new(c[0], c[1], c[2]));
+            hub_faces.push(hub_face(&t, &hub).ok_or_else(|| StripsError::Frame {
+                why: format!(
+                    "unit {u}: its hub lies in the plane of its primary tile, so it comes out \
+                     of neither face"
+                ),
+            })?);
             tiles.push(t);
         }
         let n = tiles.len();
@@ -82,7 +92,11 @@ impl TileSet {
             across[f][k] = Some((g, m));
             across[g][m] = Some((f, k));
         }
-        Ok(Self { tiles, across })
+        Ok(Self {
+            tiles,
+            across,
+            hub_faces,
+        })
     }
 
     /// Number of units.

@@ -1,11 +1,14 @@
 //! Strip invariants on solved frames: congruent flat tiles, collinear pinned joints, no
 //! overlaps, labels, and profiles that pass the design-rule check.
 
+use std::f64::consts::FRAC_PI_2;
+
 use sv_frame::{solve, FrameFile, QuadMesh, SolveOptions};
 use sv_geom::{Point2, Point3};
 use sv_strips::{
-    check_profile, convex_intersection_area, profile_strip, unit_labels, unroll, FlatStrip,
-    ProfileParams, SplitRule, StripDirection, StripOptions, StripsError, StripsFile, TileSet,
+    check_profile, convex_intersection_area, hub_face, profile_strip, unit_labels, unroll,
+    FlatStrip, HubFace, ProfileParams, SplitRule, StripDirection, StripOptions, StripsError,
+    StripsFile, TileSet,
 };
 
 fn frame(mesh: &QuadMesh) -> FrameFile {
@@ -252,6 +255,7 @@ fn a_strip_that_would_overlap_itself_is_split() {
         Point3::new(r * a.cos(), r * a.sin(), 0.0)
     };
     let tiles = TileSet {
+        hub_faces: vec![HubFace::Back; n],
         tiles: (0..n)
             .map(|i| {
                 [
@@ -317,6 +321,18 @@ fn profiles_pass_the_design_rules() {
             assert_eq!(p.labels.len(), s.units.len());
             assert_eq!(p.labels[0].text, names[0]);
             assert_eq!(p.fold_marks.len(), 8 * s.units.len() + s.pins.len());
+            // one face mark per unit, saying what the frame's poses say, upright labels
+            assert_eq!(p.face_marks.len(), s.units.len());
+            for ((m, &u), l) in p.face_marks.iter().zip(&s.units).zip(&p.labels) {
+                let q = |c: [[f64; 3]; 4]| c.map(|c| Point3::new(c[0], c[1], c[2]));
+                let want = hub_face(&q(f.units[u].primary), &q(f.units[u].hub));
+                assert_eq!(Some(m.face), want, "unit {u}");
+                assert!(l.angle > -FRAC_PI_2 && l.angle <= FRAC_PI_2, "{l:?}");
+            }
+            assert_eq!(
+                s.hub_faces,
+                p.face_marks.iter().map(|m| m.face).collect::<Vec<_>>()
+            );
             let v = check_profile(s, &p, &params);
             assert!(
                 v.is_empty(),
@@ -338,6 +354,11 @@ fn profiles_pass_the_design_rules() {
         let s0 = &json["strips"][0];
         assert_eq!(s0["id"], "A01");
         assert_eq!(s0["flat"][0]["primary"].as_array().unwrap().len(), 4);
+        assert!(["etched", "back"].contains(&s0["flat"][0]["hub_face"].as_str().unwrap()));
+        assert_eq!(
+            s0["face_marks"].as_array().unwrap().len(),
+            s0["units"].as_array().unwrap().len()
+        );
         assert_eq!(s0["outline"][0].as_array().unwrap().len(), 3);
         assert_eq!(s0["cuts"][0][0].as_array().unwrap().len(), 3);
         assert!(s0["area_mm2"].as_f64().unwrap() > 0.0);
