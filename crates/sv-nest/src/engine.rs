@@ -576,14 +576,37 @@ impl Bin {
         rng: &mut Rng64,
         budget: &mut Budget,
     ) -> Option<DTransformation> {
+        self.blf_position_behind(item, n_samples, x_limit, None, rng, budget)
+    }
+
+    /// [`Bin::blf_position`] where, with `front` given, a place that does not reach right of
+    /// `front` (the filled front of a sheet) costs nothing in x: of those the lowest wins,
+    /// then the leftmost (scores `(max(x_max, front), y_max, x_max)` compared in order), so
+    /// that a part slides down and sideways into the room behind the front instead of
+    /// stopping on the first part below it. Without `front`: x first, then y.
+    pub fn blf_position_behind(
+        &self,
+        item: &Arc<Item>,
+        n_samples: usize,
+        x_limit: f32,
+        front: Option<f32>,
+        rng: &mut Rng64,
+        budget: &mut Budget,
+    ) -> Option<DTransformation> {
         let mut buf: SPolygon = item.shape_cd().as_ref().clone();
         let height = (self.bounds.y_max - self.bounds.y_min).max(1e-6);
-        let score = |rb: &Rect, t: (f32, f32)| (t.0 + rb.x_max) + 0.05 * (t.1 + rb.y_max) / height;
+        let score = |rb: &Rect, t: (f32, f32)| -> (f32, f32, f32) {
+            let (x, y) = (t.0 + rb.x_max, t.1 + rb.y_max);
+            match front {
+                Some(f) => (x.max(f), y, x),
+                None => (x + 0.05 * y / height, 0.0, 0.0),
+            }
+        };
         let area = Rect {
             x_max: x_limit.clamp(self.bounds.x_min, self.bounds.x_max),
             ..self.bounds
         };
-        let mut best: Option<(f32, DTransformation)> = None;
+        let mut best: Option<((f32, f32, f32), DTransformation)> = None;
         let cde = self.layout.cde();
         let feasible = |dt: &DTransformation, buf: &mut SPolygon, budget: &mut Budget| {
             budget.evals += 1;
@@ -630,6 +653,7 @@ impl Bin {
                 (-step, -step),
                 (-step, step),
                 (0.0, step),
+                (step, -step),
             ] {
                 let dt = DTransformation::new(rot, (tx + dx, ty + dy));
                 let (nx, ny) = dt.translation();

@@ -69,7 +69,7 @@ pub(crate) struct PartInfo {
     pub frame: Rigid,
     /// outline area (arcs exact)
     pub area: f64,
-    /// the construction order: convex hull area x diameter of the outline's vertices
+    /// the construction order: outline area x diameter of the outline's vertices
     pub key: f64,
     /// bounding box of the outline in the part's coordinates (arcs exact)
     pub bounds: ([f64; 2], [f64; 2]),

@@ -125,8 +125,9 @@ pub(crate) struct Outline {
     pub pline: Polyline<f64>,
     /// area (arcs exact)
     pub area: f64,
-    /// convex hull area x diameter of the vertices: the construction places large parts
-    /// first
+    /// area x diameter of the vertices: the construction places large parts first. The
+    /// outline's own area, not its convex hull's: the hull of a bowed strip counts the lens
+    /// under the bow, which put the most bowed strips first and together on one sheet
     pub key: f64,
     /// bounding box (arcs exact): lower left, upper right
     pub bounds: ([f64; 2], [f64; 2]),
@@ -145,7 +146,7 @@ impl Outline {
         });
         Self {
             area: pline.area(),
-            key: crate::part::polygon_area(&hull).abs() * diameter,
+            key: pline.area().abs() * diameter,
             bounds,
             pline,
         }

@@ -682,7 +682,10 @@ const CONSTRUCTION_SHARE: f64 = 0.95;
 /// fit; a part is not tried on a sheet whose free area is smaller, nor when a part no larger
 /// (in area and both sides of its bounding box) did not fit there. A new sheet takes the
 /// first stock size that holds its first part. Each try samples positions near the sheet's
-/// filled front first. When the clock passes `deadline` (from the stage's start) the
+/// filled front first, and a place behind the front (not reaching right of the parts
+/// there) costs nothing in x, so the lowest of those wins: a strip nearly as long as the
+/// sheet slides sideways into the teeth of the one below instead of stopping on them
+/// ([`Bin::blf_position_behind`]). When the clock passes `deadline` (from the stage's start) the
 /// construction stops: it returns its sheets and the parts it did not place (in
 /// construction order; none when the clock did not stop it).
 #[allow(clippy::too_many_arguments)]
@@ -743,8 +746,16 @@ fn construct(
                 later.push(pi);
                 continue;
             }
-            let front = bin.used_x_max() + kind.item.shape_cd().diameter();
-            match bin.blf_position(&kind.item, opts.construct_samples, front, rng, budget) {
+            let filled = bin.used_x_max();
+            let front = filled + kind.item.shape_cd().diameter();
+            match bin.blf_position_behind(
+                &kind.item,
+                opts.construct_samples,
+                front,
+                Some(filled),
+                rng,
+                budget,
+            ) {
                 Some(dt) => {
                     bin.add(pi, &kind.item, dt);
                     free -= kind.area;
@@ -924,11 +935,25 @@ type Reporter<'a> = &'a mut dyn FnMut(&[Sheet], &Budget);
 /// Sheets the search works on (the emptiest ones).
 const WINDOW: usize = 7;
 
+/// Failed tries in a row to empty the emptiest sheet that end the first phase of the search
+/// (the rest of its work goes to the compaction): a sheet of parts that the others have no
+/// room for, such as strips nearly as long as the sheet, fails every try, and each one
+/// separates those large parts, the search's dearest work.
+const EMPTYING_TRIES: usize = 4;
+
+/// Failed shrinks in a row that end the compaction of the last sheet (the shrink falls from
+/// 5 % to its least, 0.2 %, in seven): parts that span the sheet, such as strips nearly as
+/// long as it, leave nothing to compact, and separating them is the search's dearest work.
+const COMPACTION_FAILURES: usize = 10;
+
 /// The search on `window` (the emptiest sheets; `others` more are not touched): while there
-/// are more sheets than the lower bound and half the work is not spent, try to empty the
-/// emptiest sheet into the others (each part into the first of the emptiest sheets that
-/// takes it, else inserted with overlap into the emptiest one and separated); then move the
-/// emptiest sheet last and compact it towards the left so that the offcut is one rectangle.
+/// are more sheets than the lower bound, half the work is not spent and fewer than
+/// [`EMPTYING_TRIES`] tries in a row failed, try to empty the emptiest sheet into the others
+/// (each part into the first of the emptiest sheets that takes it, by bottom-left fill
+/// behind its filled front, else inserted with overlap into the emptiest one and separated;
+/// a sheet with less free area than the part is not tried); then move the emptiest sheet
+/// last and compact it towards the left so that the offcut is one rectangle (until the
+/// work is spent or [`COMPACTION_FAILURES`] shrinks in a row failed).
 /// `report` hears of every sheet saved.
 fn improve(
     window: &mut Vec<Sheet>,
@@ -950,7 +975,12 @@ fn improve(
         }
     };
     emptiest_last(window);
-    while window.len() >= 2 && others + window.len() > lb.max(1) && !phase1_done(budget) {
+    let mut tries = 0;
+    while window.len() >= 2
+        && others + window.len() > lb.max(1)
+        && !phase1_done(budget)
+        && tries < EMPTYING_TRIES
+    {
         let (last_stock, mut last) = window.pop().expect("non-empty");
         let mut targets: Vec<usize> = (0..window.len()).collect();
         targets.sort_by(|&a, &b| {
@@ -968,15 +998,24 @@ fn improve(
             let mut moved = false;
             for &t in &targets {
                 let bin = &mut window[t].1;
-                if let Some(dt) =
-                    bin.blf_position(&mem.item, opts.construct_samples, f32::MAX, rng, budget)
-                {
+                if mem.item.area() > room(bin) {
+                    continue;
+                }
+                let filled = bin.used_x_max();
+                if let Some(dt) = bin.blf_position_behind(
+                    &mem.item,
+                    opts.construct_samples,
+                    f32::MAX,
+                    Some(filled),
+                    rng,
+                    budget,
+                ) {
                     bin.add(mem.inst, &mem.item, dt);
                     moved = true;
                     break;
                 }
             }
-            if !moved {
+            if !moved && mem.item.area() <= room(&window[targets[0]].1) {
                 // insert with overlap into the emptiest sheet and separate
                 let bin = &mut window[targets[0]].1;
                 let snap = bin.save();
@@ -998,6 +1037,7 @@ fn improve(
             }
         }
         if ok && last.members.is_empty() {
+            tries = 0;
             emptiest_last(window);
             report(window, budget);
         } else {
@@ -1006,6 +1046,7 @@ fn improve(
                 window[t].1.restore(sn);
             }
             window.push((last_stock, last));
+            tries += 1;
         }
     }
     // compact the last sheet towards x_min so the offcut is one rectangle
@@ -1016,7 +1057,8 @@ fn improve(
         last.set_bounds(rect(full.x_min, full.y_min, best_x, full.y_max));
         let mut best = last.save();
         let mut ratio = 0.05f32;
-        while !budget.done() && last.members.len() > 1 {
+        let mut failures = 0;
+        while !budget.done() && last.members.len() > 1 && failures < COMPACTION_FAILURES {
             let target = full.x_min + (best_x - full.x_min) * (1.0 - ratio);
             last.set_bounds(rect(full.x_min, full.y_min, target, full.y_max));
             for i in 0..last.members.len() {
@@ -1034,15 +1076,23 @@ fn improve(
                 best_x = slack(last.used_x_max());
                 last.set_bounds(rect(full.x_min, full.y_min, best_x, full.y_max));
                 best = last.save();
+                failures = 0;
             } else {
                 last.restore(&best);
                 ratio = (ratio * 0.6).max(0.002);
+                failures += 1;
             }
         }
         last.restore(&best);
         last.set_bounds(full);
     }
     report(window, budget);
+}
+
+/// Free area of a sheet: its bounds less the area of its parts' shapes.
+fn room(bin: &Bin) -> f32 {
+    let r = bin.bounds;
+    (r.x_max - r.x_min) * (r.y_max - r.y_min) - bin.area()
 }
 
 /// Seconds per collision evaluation of the sheet search on the reference machine (2 cores)
