@@ -197,6 +197,8 @@ pub struct Outcome {
     pub unmet: Vec<String>,
     /// Where the files went.
     pub out: std::path::PathBuf,
+    /// The fold check's failing rows, as one warning line (`spinvalence check DIR`).
+    pub fold_warning: Option<String>,
 }
 
 /// Load the designer's coarse layout (a quad OBJ, planarity not required).
@@ -438,17 +440,18 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
             )
         })
         .collect();
-    if !failed.is_empty() {
-        eprintln!(
+    let fold_warning = (!failed.is_empty()).then(|| {
+        format!(
             "warning: fold check: {} of {} rows fail on the parts as cut: {}",
             failed.len(),
             fold.rows.len(),
             failed.join("; ")
-        );
-    }
+        )
+    });
     Ok(Outcome {
         unmet: report.unmet.clone(),
         out: cfg.out.clone(),
+        fold_warning,
     })
 }
 
