@@ -78,6 +78,38 @@ fn the_default_build_folds_from_its_dxf_as_our_own_code_measures_it() {
     assert!(f(&fig, "lap_min") >= 25.0, "{fig}");
     // and frame.json reports the laps the parts show
     assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{fig}");
+    // `spinvalence check DIR` folds the same parts and agrees on what holds
+    let checked = dir.run(&["check", "out"]);
+    for row in [
+        "neck as cut at its pin in frame.json",
+        "leg between its necks, folded into the pose",
+        "hub lap as cut",
+        "hub lap = frame.json hub_overlap",
+        "units that cannot be rebuilt from their cut",
+    ] {
+        let line = checked
+            .stdout
+            .lines()
+            .find(|l| l.starts_with(row))
+            .unwrap_or_else(|| panic!("no row {row}: {checked:?}"));
+        assert!(line.ends_with("ok"), "{line}");
+    }
+    // its smallest lap is ours within the claim tolerance
+    let lap = checked
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("hub lap as cut"))
+        .and_then(|l| l.split_whitespace().find_map(|w| w.parse::<f64>().ok()))
+        .unwrap();
+    assert!((lap - f(&fig, "lap_min")).abs() <= 0.1, "{lap} vs {fig}");
+}
+
+/// The row of `check`'s table that starts with `name`.
+fn row<'a>(out: &'a crate::util::Output, name: &str) -> &'a str {
+    out.stdout
+        .lines()
+        .find(|l| l.starts_with(name))
+        .unwrap_or_else(|| panic!("no row {name}: {out:?}"))
 }
 
 #[test]
@@ -113,6 +145,10 @@ fn a_pose_moved_2_mm_or_a_neck_moved_2_mm_fails_both_checks_naming_the_unit() {
     let checked = dir.run(&["check", "out/frame.json"]);
     checked.expect_code(1);
     assert!(checked.stdout.contains(&id), "{id}: {checked:?}");
+    let checked = dir.run(&["check", "out"]);
+    checked.expect_code(1);
+    let legs = row(&checked, "leg between its necks, folded into the pose");
+    assert!(legs.ends_with("FAIL") && legs.contains(&id), "{id}: {legs}");
 
     // one hook slot of a unit moved 2 mm in its strip's DXF: its necks move with it
     let dir = copy_of_default_build();
@@ -136,4 +172,12 @@ fn a_pose_moved_2_mm_or_a_neck_moved_2_mm_fails_both_checks_naming_the_unit() {
     assert_eq!(code, 1, "{stdout}");
     assert!(f(&fig, "leg_error_max") > 0.5, "{fig}");
     assert!(stdout.contains(&format!("{strip}-")), "{strip}: {stdout}");
+    // `spinvalence check DIR` reads the cut from the DXF too
+    let checked = dir.run(&["check", "out"]);
+    checked.expect_code(1);
+    let necks = row(&checked, "neck as cut at its pin in frame.json");
+    assert!(
+        necks.ends_with("FAIL") && necks.contains(&format!("{strip}-")),
+        "{strip}: {necks}"
+    );
 }

@@ -197,6 +197,8 @@ pub struct Outcome {
     pub unmet: Vec<String>,
     /// Where the files went.
     pub out: std::path::PathBuf,
+    /// The fold check's failing rows, as one warning line (`spinvalence check DIR`).
+    pub fold_warning: Option<String>,
 }
 
 /// Load the designer's coarse layout (a quad OBJ, planarity not required).
@@ -289,7 +291,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     finish(&bar);
     let solved = solved.map_err(|e| anyhow!("{}: primary solve: {e}", cfg.target))?;
     let primary_s = t1.elapsed().as_secs_f64();
-    let min_overlap = cfg.primary.min_overlap(cfg.profile.thickness)?;
+    let min_overlap = cfg.primary.min_overlap(&cfg.profile)?;
     if let Err(short) = weldable(&solved, min_overlap, &cfg) {
         // on a hub mesh that met its goals the parameters are to blame: nothing is written;
         // on one that did not, short laps are one more unmet goal, and everything is written
@@ -308,6 +310,15 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     for (name, text) in &stage.drawings {
         strips_dir.write(name, text)?;
     }
+    // the parts as cut, folded at their necks into the solved poses (`spinvalence check`)
+    let fold = sv_strips::fold_check(
+        &frame,
+        &stage.file,
+        &sv_strips::FoldLimits {
+            min_overlap,
+            ..sv_strips::FoldLimits::for_profile(&cfg.profile)
+        },
+    );
     let strips_s = t2.elapsed().as_secs_f64();
 
     let t3 = Instant::now();
@@ -409,10 +420,38 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
                 .join(", "),
         ]);
         output::print_out(&output::table(&rows))?;
+        output::print_out(&format!(
+            "fold check of the parts as cut (spinvalence check {}):\n{}",
+            cfg.out.display(),
+            crate::check::render(&fold)
+        ))?;
     }
+    let failed: Vec<String> = fold
+        .rows
+        .iter()
+        .filter(|r| !r.ok)
+        .map(|r| {
+            format!(
+                "{} {} (limit {}) at {}",
+                r.name,
+                number(r.worst),
+                number(r.limit),
+                r.at
+            )
+        })
+        .collect();
+    let fold_warning = (!failed.is_empty()).then(|| {
+        format!(
+            "warning: fold check: {} of {} rows fail on the parts as cut: {}",
+            failed.len(),
+            fold.rows.len(),
+            failed.join("; ")
+        )
+    });
     Ok(Outcome {
         unmet: report.unmet.clone(),
         out: cfg.out.clone(),
+        fold_warning,
     })
 }
 

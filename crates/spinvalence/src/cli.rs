@@ -32,6 +32,9 @@ const CHECK_EXAMPLES: &str = "\
 Examples:
   spinvalence check out/cap/frame.json
   spinvalence check out/cap/frame.json && echo frame ok
+  # a build directory: the frame, then every unit rebuilt from the cut in strips.json and
+  # folded at its necks into its pose (legs, hub laps, primary plates, bridges)
+  spinvalence check out
 
 Exit code 0 when every check passes, 1 when one fails, 2 when the file cannot be read.";
 
@@ -50,7 +53,7 @@ pub enum Command {
     /// Deploy a quad mesh of hubs: solve every unit's (theta, phi) so the primary tiles meet.
     #[command(after_help = SOLVE_EXAMPLES)]
     Solve(SolveArgs),
-    /// Re-verify every invariant of a frame.json and print a table.
+    /// Re-verify a frame.json, or a build directory folded from its cut, and print a table.
     #[command(after_help = CHECK_EXAMPLES)]
     Check(CheckArgs),
     /// Nest closed-contour DXF parts onto plasma sheets (or run a strip-packing instance).
@@ -333,9 +336,14 @@ impl From<SideArg> for SidePolicy {
 /// `spinvalence check`.
 #[derive(Debug, Args)]
 pub struct CheckArgs {
-    /// A frame.json written by `spinvalence solve`.
-    #[arg(value_name = "FRAME.json")]
+    /// A frame.json written by `spinvalence solve`, or a directory written by `spinvalence
+    /// build` (its frame.json and strips.json).
+    #[arg(value_name = "FRAME.json|DIR")]
     pub frame: PathBuf,
+    /// Shortest hub lap a build directory must show (mm). Default: max(5 t, 25 mm) for the
+    /// sheet thickness t of its strips.json.
+    #[arg(long, value_name = "MM")]
+    pub min_overlap: Option<f64>,
 }
 
 /// `u` or `v`, as in the config file.

@@ -255,10 +255,10 @@ impl Default for PrimaryConfig {
 }
 
 impl PrimaryConfig {
-    /// The shortest weldable hub lap (mm) for sheet of `thickness`.
-    pub fn min_overlap(&self, thickness: f64) -> Result<f64> {
+    /// The shortest weldable hub lap (mm) for the sheet of `profile`.
+    pub fn min_overlap(&self, profile: &sv_strips::ProfileParams) -> Result<f64> {
         match self.min_overlap {
-            None => Ok((5.0 * thickness).max(25.0)),
+            None => Ok(profile.min_overlap()),
             // below zero the hubs may miss each other: for studies and benchmarks only
             Some(m) if m.is_finite() => Ok(m),
             Some(m) => bail!("invalid primary.min_overlap {m}: must be a finite length in mm"),

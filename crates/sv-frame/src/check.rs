@@ -152,33 +152,16 @@ fn legs_as_cut(
     Some(((on_hub, on_rim), flat))
 }
 
-/// Rigid fit (Kabsch) of `from` onto `to`: largest residual and whether the best
-/// orthogonal map is a proper rotation.
+/// Rigid fit (Kabsch) of `from` onto `to`: largest residual and whether the fitted rotation
+/// carries `from`'s corner-order normal onto `to`'s (a flat set fits a mirror image as well
+/// as itself, so the orientation is checked on the normals).
 fn rigid_fit(from: &[Point3; 4], to: &[Point3; 4]) -> (Real, bool) {
-    let cf = from.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / 4.0;
-    let ct = to.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / 4.0;
-    let mut h = Matrix3::zeros();
-    for i in 0..4 {
-        h += (to[i].coords - ct) * (from[i].coords - cf).transpose();
-    }
-    let svd = h.svd(true, true);
-    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
+    let Some((motion, res)) = sv_geom::rigid_fit(from, to) else {
         return (Real::NAN, false);
     };
-    let proper = (u * vt).determinant() > 0.0;
-    let mut d = Matrix3::identity();
-    if !proper {
-        d[(2, 2)] = -1.0;
-    }
-    let r = u * d * vt;
-    let res = (0..4)
-        .map(|i| (r * (from[i].coords - cf) + ct - to[i].coords).norm())
-        .fold(0.0, Real::max);
-    // a reflection fits as well as the rotation only for flat sets; then check orientation
     let n_from = (from[0] - from[2]).cross(&(from[1] - from[3]));
     let n_to = (to[0] - to[2]).cross(&(to[1] - to[3]));
-    let proper_flat = (r * n_from).dot(&n_to) > 0.0;
-    (res, proper_flat)
+    (res, (motion.rotation * n_from).dot(&n_to) > 0.0)
 }
 
 /// Re-verify every invariant of model.md on a frame file: congruence, leg lengths, the

@@ -17,9 +17,11 @@
 
 mod contour;
 pub mod planar;
+mod rigid;
 mod segment;
 
 pub use contour::{Contour, Segment, Vertex, BULGE_EPS};
+pub use rigid::rigid_fit;
 pub use segment::{segment_closest, SegmentClosest};
 
 /// The scalar type of all geometry.

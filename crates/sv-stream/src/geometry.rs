@@ -134,12 +134,9 @@ pub fn kabsch(pairs: &[[[f64; 3]; 2]], collinear_ratio: f64) -> Result<Fit, FitE
     let to_v = |p: &[f64; 3]| Vector3::new(p[0], p[1], p[2]);
     let n = pairs.len() as f64;
     let cm = pairs.iter().map(|p| to_v(&p[0])).sum::<Vector3>() / n;
-    let cs = pairs.iter().map(|p| to_v(&p[1])).sum::<Vector3>() / n;
-    let mut h = Matrix3::zeros();
     let mut cov = Matrix3::zeros();
     for p in pairs {
-        let (a, b) = (to_v(&p[0]) - cm, to_v(&p[1]) - cs);
-        h += a * b.transpose();
+        let a = to_v(&p[0]) - cm;
         cov += a * a.transpose();
     }
     let mut spread = cov
@@ -153,17 +150,11 @@ pub fn kabsch(pairs: &[[[f64; 3]; 2]], collinear_ratio: f64) -> Result<Fit, FitE
             "model points are collinear or coincident".into(),
         ));
     }
-    let svd = h.svd(true, true);
-    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-        return Err(FitError::Degenerate("SVD failed".into()));
-    };
-    let v = v_t.transpose();
-    let d = (v * u.transpose()).determinant().signum();
-    let r = v * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * u.transpose();
-    let rotation =
-        UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(r));
-    let t = cs - rotation * cm;
-    let iso = Isometry3::from_parts(t.into(), rotation);
+    let model: Vec<Point3> = pairs.iter().map(|p| Point3::from(to_v(&p[0]))).collect();
+    let measured: Vec<Point3> = pairs.iter().map(|p| Point3::from(to_v(&p[1]))).collect();
+    let (iso, _) = sv_geom::rigid_fit(&model, &measured).ok_or_else(|| {
+        FitError::Degenerate("coordinates too large: the fit is not a finite number".into())
+    })?;
     let residuals: Vec<f64> = pairs
         .iter()
         .map(|p| (iso * Point3::from(to_v(&p[0])) - Point3::from(to_v(&p[1]))).norm())

@@ -235,16 +235,19 @@ async fn viewer_role_is_read_only() {
 
 #[tokio::test]
 async fn wrong_token_closes_4401_and_silence_closes_4408() {
-    let mut cfg = config();
-    cfg.hello_timeout = Duration::from_millis(300);
-    let server = Server::start(cfg).await.unwrap();
+    // the default hello timeout: a busy machine's delay before the hello is not silence
+    let server = Server::start(config()).await.unwrap();
     let mut c = connect(&server).await;
     c.expect("welcome").await;
     c.send(json!({"type": "hello", "token": "op-secret-2025"}))
         .await;
     assert_eq!(c.expect("error").await["code"], "unauthorized");
     assert_eq!(c.closed().await, Some(4401));
+    server.shutdown().await;
 
+    let mut cfg = config();
+    cfg.hello_timeout = Duration::from_millis(300);
+    let server = Server::start(cfg).await.unwrap();
     let mut c = connect(&server).await;
     c.expect("welcome").await;
     assert_eq!(c.closed().await, Some(4408));
@@ -490,7 +493,10 @@ async fn rate_limit_coalesces_latest() {
     let mut refs = Vec::new();
     let mut coalesced = 0;
     let mut other_seen = false;
-    while let Some(Ok(m)) = c.try_recv(Duration::from_millis(400)).await {
+    // a long wait per message: a busy machine may pause the server, never end the stream
+    let mut last = 0.0;
+    while let Some(Ok(m)) = c.try_recv(Duration::from_secs(3)).await {
+        last = t0.elapsed().as_secs_f64();
         assert_eq!(m["type"], "check");
         if m["unit"] == other.as_str() {
             other_seen = true;
@@ -499,7 +505,8 @@ async fn rate_limit_coalesces_latest() {
         refs.push(m["ref"].as_i64().unwrap());
         coalesced += m["coalesced"].as_u64().unwrap();
     }
-    let elapsed = t0.elapsed().as_secs_f64();
+    // up to the last check received, not the wait after it
+    let elapsed = last;
     assert!(other_seen, "the other unit's track was lost");
     // the burst of 60 passes at once; the rest arrive at 30 per second at most
     let bound = 60 + 2 + (elapsed * 30.0).ceil() as usize;

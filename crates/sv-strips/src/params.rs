@@ -155,6 +155,12 @@ impl ProfileParams {
         (1.5 * self.thickness).max(3.0)
     }
 
+    /// The shortest hub lap that can carry a stress-carrying lap weld: max(5 t, 25 mm)
+    /// (AWS D1.1), the default of `[primary] min_overlap`.
+    pub fn min_overlap(&self) -> f64 {
+        (5.0 * self.thickness).max(25.0)
+    }
+
     /// Smallest diameter of a slot's round end: max(kerf + 0.5 mm, t).
     pub fn min_slot_end_diameter(&self) -> f64 {
         (self.kerf + 0.5).max(self.thickness)

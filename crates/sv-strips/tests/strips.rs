@@ -508,3 +508,70 @@ fn strips_end_at_vertices_of_odd_valence_on_an_irregular_mesh() {
         );
     }
 }
+
+/// A sphere cap solved as cut for the default profile, unrolled and profiled: its file.
+fn cap_as_cut() -> (FrameFile, StripsFile) {
+    let params = ProfileParams::default();
+    let mesh = QuadMesh::sphere_cap(6, 6, 3000.0, 300.0);
+    let options = SolveOptions {
+        cut: Some(params.cut_widths()),
+        ..SolveOptions::default()
+    };
+    let mut f = solve(&mesh, &options, &mut |_| {})
+        .unwrap()
+        .to_frame_file(&mesh);
+    let strip_options = StripOptions::default();
+    let strips = unroll(&f, &strip_options).unwrap();
+    sv_strips::apply_labels(&mut f, &strips);
+    let labels = unit_labels(&strips, f.units.len());
+    let profiles: Vec<_> = strips
+        .iter()
+        .map(|s| {
+            let names: Vec<String> = s.units.iter().map(|&u| labels[u].id.clone()).collect();
+            profile_strip(s, &names, &params).unwrap()
+        })
+        .collect();
+    let file = StripsFile::new(
+        &strips,
+        &profiles,
+        &params,
+        f.params.expansion,
+        &strip_options,
+    );
+    (f, file)
+}
+
+fn fold_row<'a>(r: &'a sv_frame::CheckReport, name: &str) -> &'a sv_frame::CheckRow {
+    r.rows
+        .iter()
+        .find(|r| r.name.starts_with(name))
+        .unwrap_or_else(|| panic!("no row {name}: {r:#?}"))
+}
+
+#[test]
+fn parts_as_cut_fold_into_their_poses_and_a_slot_moved_2_mm_is_caught_at_its_unit() {
+    let (f, file) = cap_as_cut();
+    let limits = sv_strips::FoldLimits::for_profile(&file.params.profile);
+    let r = sv_strips::fold_check(&f, &file, &limits);
+    for name in [
+        "neck as cut",
+        "leg between its necks",
+        "hub plate as cut",
+        "hub lap = frame.json",
+        "units that cannot be rebuilt",
+    ] {
+        assert!(fold_row(&r, name).ok, "{:#?}", fold_row(&r, name));
+    }
+    // the necks are found where the layout pins the legs, to far below a kerf
+    assert!(fold_row(&r, "neck as cut").worst < 0.5);
+    // one slot of the fifth unit of the first strip moved 2 mm across its strip
+    let mut moved = file.clone();
+    let s = &mut moved.strips[0];
+    let unit = s.units[4];
+    let k = s.cut_units.iter().position(|&u| u == unit).unwrap();
+    s.cuts[k] = s.cuts[k].transformed(0.0, [0.0, 2.0]);
+    let r = sv_strips::fold_check(&f, &moved, &limits);
+    let necks = fold_row(&r, "neck as cut");
+    assert!(!necks.ok && necks.worst > 0.5, "{necks:?}");
+    assert!(necks.at.contains(&f.units[unit].id), "{necks:?}");
+}

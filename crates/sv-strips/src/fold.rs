@@ -1,0 +1,458 @@
+//! The fold check of a build, done as a fabricator would: every unit is rebuilt from its
+//! cut (the slots of `strips.json`), its necks are found where the cut leaves the narrowest
+//! web, and the flat part is folded at them into the pose `frame.json` gives it. What is
+//! measured there (legs, hub laps, facing primary plates, bridges) is what the steel shows.
+
+use std::collections::HashMap;
+
+use sv_frame::{CheckReport, CheckRow, FrameFile};
+use sv_geom::{planar, rigid_fit, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
+use sv_unit::UnitLayout;
+
+use crate::{ProfileParams, StripRecord, StripsFile};
+
+/// Limits of [`fold_check`] (mm and degrees).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FoldLimits {
+    /// Largest error of a leg's length between its necks folded into the pose.
+    pub leg: Real,
+    /// Largest distance between a neck as cut and its pin in frame.json.
+    pub pin: Real,
+    /// Smallest hub lap at a link, on the hub plates as cut (the weld minimum).
+    pub min_overlap: Real,
+    /// Largest difference between a lap measured here and frame.json's `hub_overlap`.
+    pub overlap_claim: Real,
+    /// Deepest allowed pass-through of facing primary plates at a link between strips.
+    pub collision: Real,
+    /// Largest change of a bridge's length from flat to folded.
+    pub bridge_span: Real,
+    /// Largest in-plane bend of a bridge (degrees).
+    pub bridge_bend_deg: Real,
+}
+
+impl FoldLimits {
+    /// The defaults for `params`: legs, pins and bridges within 0.5 mm, claims within
+    /// 0.1 mm, collisions none deeper than 0.1 mm, laps of at least the weld minimum
+    /// ([`ProfileParams::min_overlap`]), bridges bent in their plane by at most 3 degrees.
+    pub fn for_profile(params: &ProfileParams) -> Self {
+        Self {
+            leg: 0.5,
+            pin: 0.5,
+            min_overlap: params.min_overlap(),
+            overlap_claim: 0.1,
+            collision: 0.1,
+            bridge_span: 0.5,
+            bridge_bend_deg: 3.0,
+        }
+    }
+}
+
+/// One row: its worst value and where; `ok` compares with the limit in the row's sense.
+struct Row {
+    name: &'static str,
+    limit: Real,
+    /// `true`: the value must stay at or above the limit (laps), else at or below.
+    at_least: bool,
+    worst: Option<(Real, String)>,
+}
+
+impl Row {
+    fn max(name: &'static str, limit: Real) -> Self {
+        Self {
+            name,
+            limit,
+            at_least: false,
+            worst: None,
+        }
+    }
+    fn min(name: &'static str, limit: Real) -> Self {
+        Self {
+            at_least: true,
+            ..Self::max(name, limit)
+        }
+    }
+    fn see(&mut self, value: Real, at: impl FnOnce() -> String) {
+        let worse = match &self.worst {
+            None => true,
+            Some((w, _)) if w.is_nan() => false,
+            Some(_) if value.is_nan() => true,
+            Some((w, _)) => {
+                if self.at_least {
+                    value < *w
+                } else {
+                    value > *w
+                }
+            }
+        };
+        if worse {
+            self.worst = Some((value, at()));
+        }
+    }
+    fn row(self) -> CheckRow {
+        let (worst, at) = self
+            .worst
+            .unwrap_or((if self.at_least { Real::INFINITY } else { 0.0 }, "-".into()));
+        let ok = if self.at_least {
+            worst >= self.limit
+        } else {
+            worst <= self.limit
+        };
+        CheckRow {
+            name: self.name.into(),
+            worst,
+            limit: self.limit,
+            at,
+            ok,
+        }
+    }
+}
+
+fn p3(a: &[Real; 3]) -> Point3 {
+    Point3::new(a[0], a[1], a[2])
+}
+
+fn lift(p: &Point2) -> Point3 {
+    Point3::new(p.x, p.y, 0.0)
+}
+
+/// `q` scaled by `e` about its centroid.
+fn expanded(q: &[[Real; 3]; 4], e: Real) -> [Point3; 4] {
+    let c = q.iter().fold(Vector3::zeros(), |a, p| a + p3(p).coords) / 4.0;
+    q.map(|p| Point3::from(c + (p3(&p).coords - c) * e))
+}
+
+/// The narrowest web between two different slots of a unit near `near`: its centre and
+/// width. `slots` are the unit's slot contours flattened to closed polylines.
+fn narrowest_web(slots: &[Vec<[Real; 2]>], near: Point2, radius: Real) -> Option<(Point2, Real)> {
+    let at = [near.x, near.y];
+    let segments = |s: &Vec<[Real; 2]>| -> Vec<([Real; 2], [Real; 2])> {
+        (0..s.len())
+            .map(|i| (s[i], s[(i + 1) % s.len()]))
+            .filter(|(a, b)| planar::point_segment_distance(at, *a, *b) <= radius)
+            .collect()
+    };
+    let near_slots: Vec<Vec<([Real; 2], [Real; 2])>> = slots
+        .iter()
+        .map(segments)
+        .filter(|s| !s.is_empty())
+        .collect();
+    let mut best: Option<(Point2, Real)> = None;
+    for (i, a) in near_slots.iter().enumerate() {
+        for b in &near_slots[i + 1..] {
+            for (a0, a1) in a {
+                for (b0, b1) in b {
+                    let (pa0, pa1) = (
+                        Point3::new(a0[0], a0[1], 0.0),
+                        Point3::new(a1[0], a1[1], 0.0),
+                    );
+                    let (pb0, pb1) = (
+                        Point3::new(b0[0], b0[1], 0.0),
+                        Point3::new(b1[0], b1[1], 0.0),
+                    );
+                    let c = segment_closest(&pa0, &pa1, &pb0, &pb1);
+                    if best.is_some_and(|(_, w)| w <= c.distance) {
+                        continue;
+                    }
+                    let x = pa0 + (pa1 - pa0) * c.s;
+                    let y = pb0 + (pb1 - pb0) * c.t;
+                    best = Some((
+                        Point2::new((x.x + y.x) / 2.0, (x.y + y.y) / 2.0),
+                        c.distance,
+                    ));
+                }
+            }
+        }
+    }
+    best
+}
+
+/// One unit of a strip, flat and folded.
+struct Folded {
+    /// Flat (strip frame) to world, for the primary plate.
+    primary: Isometry3,
+    /// The hub plate as cut, in the world.
+    hub_plate: [Point3; 4],
+    /// The primary plate as cut (the tile inset by half the joint slot), in the world.
+    plate: [Point3; 4],
+}
+
+/// Fold-check a build: `strips` cut from `frame`. Rows: necks where frame.json pins them,
+/// legs between their necks, hub plates, hub laps against the weld minimum and against the
+/// file, facing primary plates at links between strips, bridges (span and in-plane bend).
+pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -> CheckReport {
+    let params = &strips.params.profile;
+    let widths = params.cut_widths();
+    let e = frame.params.expansion;
+    let mut pins = Row::max("neck as cut at its pin in frame.json (mm)", limits.pin);
+    let mut legs = Row::max(
+        "leg between its necks, folded into the pose (mm)",
+        limits.leg,
+    );
+    let mut plates = Row::max(
+        "hub plate as cut = frame.json hub_plate (mm)",
+        limits.overlap_claim,
+    );
+    let mut rebuilt = Row::max("units that cannot be rebuilt from their cut", 0.0);
+    let mut folded: HashMap<usize, Folded> = HashMap::new();
+    let mut strip_of: HashMap<usize, usize> = HashMap::new();
+    let mut unrebuilt = 0.0;
+    for (si, strip) in strips.strips.iter().enumerate() {
+        for (j, tile) in strip.flat.iter().enumerate() {
+            let u = tile.unit;
+            let name = || {
+                frame
+                    .units
+                    .get(u)
+                    .map_or(format!("unit {u}"), |r| format!("unit {}", r.id))
+            };
+            strip_of.insert(u, si);
+            match fold_unit(frame, strip, j, &widths, e) {
+                Ok((f, necks)) => {
+                    for (what, err) in necks.pin_offsets {
+                        pins.see(err, || format!("{} {what}", name()));
+                    }
+                    for (k, err) in necks.leg_errors.iter().enumerate() {
+                        legs.see(*err, || format!("{} leg {k}", name()));
+                    }
+                    if let Some(hp) = frame.units[u].hub_plate {
+                        let off = (0..4)
+                            .map(|k| (f.hub_plate[k] - p3(&hp[k])).norm())
+                            .fold(0.0, Real::max);
+                        plates.see(off, name);
+                    }
+                    folded.insert(u, f);
+                }
+                Err(why) => {
+                    unrebuilt += 1.0;
+                    rebuilt.see(unrebuilt, || format!("{}: {why}", name()));
+                }
+            }
+        }
+    }
+    let mut laps = Row::min("hub lap as cut (mm, smallest)", limits.min_overlap);
+    let mut claims = Row::max(
+        "hub lap = frame.json hub_overlap (mm)",
+        limits.overlap_claim,
+    );
+    let mut collisions = Row::max(
+        "facing primary plates pass through (mm, deepest)",
+        limits.collision,
+    );
+    for (li, link) in frame.links.iter().enumerate() {
+        let [a, b] = link.units;
+        let (Some(fa), Some(fb), Some([k, m])) = (folded.get(&a), folded.get(&b), link.slots)
+        else {
+            continue;
+        };
+        let at = || format!("link {li} ({} - {})", frame.units[a].id, frame.units[b].id);
+        let ca = centroid(&fa.hub_plate);
+        let cb = centroid(&fb.hub_plate);
+        let dir = (cb - ca).normalize();
+        let lap = (fa.hub_plate[k] - fb.hub_plate[m]).dot(&dir);
+        laps.see(lap, at);
+        claims.see((lap - link.hub_overlap).abs(), at);
+        if strip_of.get(&a) != strip_of.get(&b) {
+            let depth = pass_through(&fa.plate, k, &fb.plate, m)
+                .max(pass_through(&fb.plate, m, &fa.plate, k));
+            collisions.see(depth, at);
+        }
+    }
+    let mut span = Row::max("bridge length folded - flat (mm)", limits.bridge_span);
+    let mut bend = Row::max("bridge bent in its plane (deg)", limits.bridge_bend_deg);
+    for strip in &strips.strips {
+        for pin in &strip.pins {
+            let [a, b] = pin.units;
+            let (Some(fa), Some(fb)) = (folded.get(&a), folded.get(&b)) else {
+                continue;
+            };
+            let at = || {
+                format!(
+                    "strip {} bridge {} - {}",
+                    strip.id, frame.units[a].id, frame.units[b].id
+                )
+            };
+            let Some(ta) = strip.flat.iter().find(|t| t.unit == a) else {
+                continue;
+            };
+            let (s, g) = bridge(
+                fa,
+                fb,
+                &ta.primary,
+                pin.sides[0],
+                pin.at,
+                params.neck_width,
+                params.neck_length,
+            );
+            span.see(s, at);
+            bend.see(g, at);
+        }
+    }
+    let rows = [
+        pins, legs, plates, laps, claims, collisions, span, bend, rebuilt,
+    ]
+    .into_iter()
+    .map(Row::row)
+    .collect();
+    CheckReport { rows }
+}
+
+fn centroid(q: &[Point3; 4]) -> Point3 {
+    Point3::from(q.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / 4.0)
+}
+
+/// What the necks of one unit show.
+struct Necks {
+    /// Per neck (`hub neck j` / `rim neck j`): distance between the neck as cut, folded,
+    /// and frame.json's pin.
+    pin_offsets: Vec<(String, Real)>,
+    /// Per leg: | folded length - flat length | between its two necks as cut.
+    leg_errors: [Real; 4],
+}
+
+/// Unit `j` of `strip`: its cut found in the slots, folded into its pose.
+fn fold_unit(
+    frame: &FrameFile,
+    strip: &StripRecord,
+    j: usize,
+    widths: &sv_unit::CutWidths,
+    e: Real,
+) -> Result<(Folded, Necks), String> {
+    let tile = &strip.flat[j];
+    let u = tile.unit;
+    let unit = frame
+        .units
+        .get(u)
+        .ok_or_else(|| format!("frame.json has no unit {u}"))?;
+    let flat = tile.primary.map(|p| Point2::new(p[0], p[1]));
+    let layout = UnitLayout::new(&flat, widths).map_err(|e| e.0)?;
+    let flat3 = flat.map(|p| lift(&p));
+    let (primary, res_p) =
+        rigid_fit(&flat3, &expanded(&unit.primary, e)).ok_or("the primary tile is degenerate")?;
+    let (hub, res_h) = rigid_fit(&flat3, &expanded(&unit.hub, e)).ok_or("the hub is degenerate")?;
+    if res_p.max(res_h) > 0.01 {
+        return Err(format!(
+            "its flat tile is not congruent to frame.json's tiles ({:.3} mm off)",
+            res_p.max(res_h)
+        ));
+    }
+    let slots: Vec<Vec<[Real; 2]>> = strip
+        .cuts
+        .iter()
+        .zip(&strip.cut_units)
+        .filter(|(_, &cu)| cu == u)
+        .map(|(c, _)| c.flatten(0.002))
+        .collect();
+    if slots.len() != 4 {
+        return Err(format!(
+            "{} slots in strips.json, a unit has 4",
+            slots.len()
+        ));
+    }
+    let nominal = layout.pins();
+    let radius = widths.neck + 2.0 * widths.slot + 2.0;
+    let find = |p: Point2, what: &str| {
+        narrowest_web(&slots, p, radius)
+            .map(|(c, _)| c)
+            .ok_or_else(|| format!("no neck in the cut near its {what}"))
+    };
+    let mut hub_pins = [Point2::origin(); 4];
+    let mut rim_pins = [Point2::origin(); 4];
+    for k in 0..4 {
+        hub_pins[k] = find(nominal.hub[k], "hub pin")?;
+        rim_pins[k] = find(nominal.rim[k], "rim pin")?;
+    }
+    let hub_world = hub_pins.map(|p| hub * lift(&p));
+    let rim_world = rim_pins.map(|p| primary * lift(&p));
+    let mut pin_offsets = Vec::with_capacity(8);
+    if let Some(file) = &unit.pins {
+        for k in 0..4 {
+            pin_offsets.push((
+                format!("hub neck {k}"),
+                (hub_world[k] - p3(&file.hub[k])).norm(),
+            ));
+            pin_offsets.push((
+                format!("rim neck {k}"),
+                (rim_world[k] - p3(&file.rim[k])).norm(),
+            ));
+        }
+    }
+    let leg_errors = std::array::from_fn(|k| {
+        ((hub_world[k] - rim_world[k]).norm() - (hub_pins[k] - rim_pins[k]).norm()).abs()
+    });
+    Ok((
+        Folded {
+            primary,
+            hub_plate: layout.hub.map(|p| hub * lift(&p)),
+            plate: layout.plate.map(|p| primary * lift(&p)),
+        },
+        Necks {
+            pin_offsets,
+            leg_errors,
+        },
+    ))
+}
+
+/// How deep side `m` of plate `b` passes through plate `a` (mm, 0 when it does not): the
+/// distance inside `a`, from `a`'s facing side `k`, where `b`'s side crosses `a`'s plane.
+fn pass_through(a: &[Point3; 4], k: usize, b: &[Point3; 4], m: usize) -> Real {
+    let n = (a[2] - a[0]).cross(&(a[3] - a[1]));
+    if n.norm() < 1e-12 {
+        return 0.0;
+    }
+    let n = n.normalize();
+    let (p, q) = (b[m], b[(m + 1) % 4]);
+    let (dp, dq) = ((p - a[0]).dot(&n), (q - a[0]).dot(&n));
+    if dp * dq > 0.0 || dp == dq {
+        return 0.0;
+    }
+    let x = p + (q - p) * (dp / (dp - dq));
+    // inside the convex plate: on the inner side of every edge
+    let inside = |i: usize| {
+        let (s, t) = (a[i], a[(i + 1) % 4]);
+        n.cross(&(t - s)).normalize().dot(&(x - s))
+    };
+    if (0..4).any(|i| inside(i) < 0.0) {
+        return 0.0;
+    }
+    inside(k)
+}
+
+/// A bridge between consecutive units `a` (owning `tile`, its facing side `k`) and `b`,
+/// centred on the joint line near `at`: the largest change of its length at its two edges
+/// and its in-plane bend (degrees), folded.
+fn bridge(
+    a: &Folded,
+    b: &Folded,
+    tile: &[[Real; 2]; 4],
+    k: usize,
+    at: [Real; 2],
+    width: Real,
+    length: Real,
+) -> (Real, Real) {
+    let o = Point2::new(tile[k][0], tile[k][1]);
+    let next = Point2::new(tile[(k + 1) % 4][0], tile[(k + 1) % 4][1]);
+    let along = (next - o).normalize();
+    let inward = sv_geom::Vector2::new(-along.y, along.x);
+    let c = o + along * (Point2::new(at[0], at[1]) - o).dot(&along);
+    let mut worst: Real = 0.0;
+    let mut ends = [[Point3::origin(); 2]; 2];
+    for (i, s) in [-0.5, 0.5].into_iter().enumerate() {
+        let edge = c + along * (s * width);
+        let on_a = a.primary * lift(&(edge + inward * (length / 2.0)));
+        let on_b = b.primary * lift(&(edge - inward * (length / 2.0)));
+        worst = worst.max(((on_a - on_b).norm() - length).abs());
+        ends[i] = [on_a, on_b];
+    }
+    // the bridge's two ends seen along the joint: their directions on a and on b
+    let da = ends[1][0] - ends[0][0];
+    let db = ends[1][1] - ends[0][1];
+    let na = a.primary * Vector3::z();
+    // the in-plane part of the turn from a's end to b's end: in a's plate
+    let db_in = db - na * db.dot(&na);
+    let bend = if db_in.norm() < 1e-12 {
+        90.0
+    } else {
+        da.angle(&db_in).to_degrees()
+    };
+    (worst, bend)
+}
