@@ -3,6 +3,7 @@
 //! Pure computation; `build` writes the results atomically.
 
 use anyhow::{anyhow, bail, Result};
+use rayon::prelude::*;
 use sv_frame::FrameFile;
 use sv_strips::{FlatStrip, ProfileParams, StripOptions, StripProfile, StripsFile, Violation};
 
@@ -43,17 +44,26 @@ pub fn run(
     }
     let strips = sv_strips::unroll(frame, options).map_err(|e| anyhow!("strips: {e}"))?;
     sv_strips::apply_labels(frame, &strips);
+    // every strip on its own core (in strip order, whichever finishes first)
+    let profiled: Vec<Result<(StripProfile, Vec<Violation>)>> = strips
+        .par_iter()
+        .map(|strip| {
+            let names: Vec<String> = strip
+                .units
+                .iter()
+                .map(|&u| frame.units.get(u).map(|r| r.id.clone()).unwrap_or_default())
+                .collect();
+            let profile = sv_strips::profile_strip(strip, &names, params)
+                .map_err(|e| anyhow!("profile: {e}"))?;
+            let violations = sv_strips::check_profile(strip, &profile, params);
+            Ok((profile, violations))
+        })
+        .collect();
     let mut profiles: Vec<StripProfile> = Vec::with_capacity(strips.len());
     let mut violations: Vec<Violation> = Vec::new();
-    for strip in &strips {
-        let names: Vec<String> = strip
-            .units
-            .iter()
-            .map(|&u| frame.units.get(u).map(|r| r.id.clone()).unwrap_or_default())
-            .collect();
-        let profile =
-            sv_strips::profile_strip(strip, &names, params).map_err(|e| anyhow!("profile: {e}"))?;
-        violations.extend(sv_strips::check_profile(strip, &profile, params));
+    for p in profiled {
+        let (profile, v) = p?;
+        violations.extend(v);
         profiles.push(profile);
     }
     if !violations.is_empty() {
@@ -73,17 +83,22 @@ pub fn run(
             }
         );
     }
-    let mut drawings = Vec::with_capacity(2 * strips.len());
-    for (strip, profile) in strips.iter().zip(&profiles) {
-        drawings.push((
-            format!("{}.dxf", strip.id),
-            sv_export::strip_dxf(strip, profile),
-        ));
-        drawings.push((
-            format!("{}.svg", strip.id),
-            sv_export::strip_svg(strip, profile, params),
-        ));
-    }
+    let drawings: Vec<(String, String)> = strips
+        .par_iter()
+        .zip(&profiles)
+        .flat_map_iter(|(strip, profile)| {
+            [
+                (
+                    format!("{}.dxf", strip.id),
+                    sv_export::strip_dxf(strip, profile),
+                ),
+                (
+                    format!("{}.svg", strip.id),
+                    sv_export::strip_svg(strip, profile, params),
+                ),
+            ]
+        })
+        .collect();
     let worst_pin = strips
         .iter()
         .flat_map(|s| &s.pins)

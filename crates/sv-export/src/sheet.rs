@@ -173,11 +173,12 @@ impl Placed {
         }
     }
 
-    /// Distance from `p` to this part's box (0 inside it): no point of the part is nearer.
-    fn box_distance(&self, p: [f64; 2]) -> f64 {
+    /// Squared distance from `p` to this part's box (0 inside it): no point of the part
+    /// is nearer.
+    fn box_distance2(&self, p: [f64; 2]) -> f64 {
         let dx = (self.lo[0] - p[0]).max(p[0] - self.hi[0]).max(0.0);
         let dy = (self.lo[1] - p[1]).max(p[1] - self.hi[1]).max(0.0);
-        dx.hypot(dy)
+        dx * dx + dy * dy
     }
 
     /// Whether `p` is on this part's material (inside the outline, outside every hole),
@@ -345,7 +346,7 @@ fn outside_pierce(parts: &[Placed], k: usize, offset: f64, sheet: [f64; 2]) -> [
         // a part whose box is farther than the nearest so far cannot be nearer
         let mut clear = f64::INFINITY;
         for q in parts {
-            if q.box_distance(p) >= clear {
+            if q.box_distance2(p) >= clear * clear {
                 continue;
             }
             clear = clear.min(if q.covers(p, 0.0) {

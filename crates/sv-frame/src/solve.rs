@@ -10,6 +10,7 @@
 //! normal equations (2x2 blocks, one per unit and per link) and factors them with faer's
 //! sparse Cholesky, whose symbolic analysis is done once.
 
+use rayon::prelude::*;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
@@ -482,15 +483,19 @@ impl Problem<'_> {
         }
     }
 
+    /// Every unit's primary corners (on every core; the first unit in order that fails
+    /// names the error, so the result does not depend on the threads).
     fn corners(&self, deps: &[Deployment]) -> Result<Vec<[Point3; 4]>, FrameError> {
-        deps.iter()
+        let all: Vec<Result<[Point3; 4], FrameError>> = deps
+            .par_iter()
             .enumerate()
             .map(|(f, d)| {
                 self.units
                     .primary_world(f, &self.hubs[f], d, self.units.expansion())
                     .map_err(|e| self.unit_error(f, e))
             })
-            .collect()
+            .collect();
+        all.into_iter().collect()
     }
 
     /// Gradient and Gauss-Newton blocks at `deps` of an objective `sum_l h_l(r_l)` whose
@@ -508,9 +513,10 @@ impl Problem<'_> {
         off: &mut [[Real; 4]],
     ) -> Result<(), FrameError> {
         let p = self;
-        // corners and their Jacobians
-        let jac: Vec<_> = deps
-            .iter()
+        // corners and their Jacobians, on every core (the first failing unit in order
+        // names the error)
+        let jac: Vec<Result<_, FrameError>> = deps
+            .par_iter()
             .enumerate()
             .map(|(f, d)| {
                 let hub = &p.hubs[f];
@@ -525,7 +531,8 @@ impl Problem<'_> {
                     })
                     .map_err(|e| p.unit_error(f, e))
             })
-            .collect::<Result<_, _>>()?;
+            .collect();
+        let jac: Vec<_> = jac.into_iter().collect::<Result<_, _>>()?;
         grad.iter_mut().for_each(|g| *g = 0.0);
         grad2.iter_mut().for_each(|g| *g = 0.0);
         diag.iter_mut().for_each(|d| *d = [0.0; 3]);

@@ -18,6 +18,7 @@
 //! Every entity skipped or repaired is named once in [`DxfParts::notes`] (layer, entity
 //! type, handle); every contour that cannot be a part is in [`DxfParts::rejected`].
 
+mod boxes;
 mod chain;
 mod fit;
 mod layers;

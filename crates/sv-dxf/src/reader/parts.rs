@@ -5,6 +5,7 @@
 
 use sv_geom::Contour;
 
+use super::boxes::BoxIndex;
 use super::chain::{Chained, Open};
 use super::source::{Closed, Cut};
 
@@ -14,6 +15,7 @@ pub(crate) struct Candidate {
     pub(crate) srcs: Vec<usize>,
     pub(crate) cut: Cut,
     area: f64,
+    length: f64,
     bounds: ([f64; 2], [f64; 2]),
     probe: [f64; 2],
 }
@@ -21,6 +23,7 @@ pub(crate) struct Candidate {
 impl Candidate {
     fn new(contour: Contour, srcs: Vec<usize>, cut: Cut) -> Self {
         let area = contour.area();
+        let length = contour.length();
         let bounds = contour.bounds().unwrap_or(([0.0; 2], [0.0; 2]));
         let probe = contour.segments().next().map_or([0.0; 2], |s| s.midpoint());
         Self {
@@ -28,6 +31,7 @@ impl Candidate {
             srcs,
             cut,
             area,
+            length,
             bounds,
             probe,
         }
@@ -68,7 +72,7 @@ pub(crate) struct Classified {
 /// Whether `b` repeats `a` (the same contour within `tol`, either way round).
 fn same(a: &Candidate, b: &Candidate, tol: f64) -> bool {
     let scale = a.area.max(b.area).max(1e-12);
-    if (a.area - b.area).abs() > 1e-6 * scale + tol * a.contour.length().max(b.contour.length()) {
+    if (a.area - b.area).abs() > 1e-6 * scale + tol * a.length.max(b.length) {
         return false;
     }
     let close = |x: [f64; 2], y: [f64; 2]| (x[0] - y[0]).abs() <= tol && (x[1] - y[1]).abs() <= tol;
@@ -104,18 +108,28 @@ pub(crate) fn classify(
         }
         keep
     });
-    // repeated contours: the later copy goes
+    // repeated contours: the later copy goes. A repeat's box is within `tol` of the
+    // contour's, so it holds the contour's lower left corner grown by `tol`
+    let boxes: Vec<_> = cands.iter().map(|c| c.bounds).collect();
+    let index = BoxIndex::new(&boxes, tol);
     let mut order: Vec<usize> = (0..cands.len()).collect();
-    order.sort_by(|&a, &b| cands[a].area.total_cmp(&cands[b].area));
-    let mut gone = vec![false; cands.len()];
+    order.sort_by(|&a, &b| cands[a].area.total_cmp(&cands[b].area).then(a.cmp(&b)));
+    let mut rank = vec![0; cands.len()];
     for (k, &i) in order.iter().enumerate() {
+        rank[i] = k;
+    }
+    let mut gone = vec![false; cands.len()];
+    for &i in &order {
         if gone[i] {
             continue;
         }
-        for &j in &order[k + 1..] {
-            if cands[j].area > cands[i].area * (1.0 + 1e-6) + tol * cands[i].contour.length() {
-                break;
-            }
+        let mut near: Vec<usize> = index
+            .at(cands[i].bounds.0)
+            .into_iter()
+            .filter(|&j| rank[j] > rank[i])
+            .collect();
+        near.sort_by_key(|&j| rank[j]);
+        for j in near {
             if !gone[j] && same(&cands[i], &cands[j], tol) {
                 let (keep, drop) = if i < j { (i, j) } else { (j, i) };
                 gone[drop] = true;
@@ -136,9 +150,13 @@ pub(crate) fn classify(
         .collect();
     // containment: the parent is the smallest larger contour holding a point of this one
     let parents = |cands: &[Candidate]| -> Vec<Option<usize>> {
+        let boxes: Vec<_> = cands.iter().map(|c| c.bounds).collect();
+        let index = BoxIndex::new(&boxes, 0.0);
         (0..cands.len())
             .map(|i| {
-                (0..cands.len())
+                index
+                    .at(cands[i].probe)
+                    .into_iter()
                     .filter(|&j| {
                         j != i && cands[j].area > cands[i].area && cands[j].holds(cands[i].probe)
                     })
@@ -264,10 +282,13 @@ pub(crate) fn etch_of(
         .map(|p| p.0.bounds().unwrap_or(([0.0; 2], [0.0; 2])))
         .collect();
     let areas: Vec<f64> = parts.iter().map(|p| p.0.area()).collect();
+    let index = BoxIndex::new(&boxes, 0.0);
     let mut out = vec![Vec::new(); parts.len()];
     for (line, src) in etch {
         let p = line[0];
-        let on = (0..parts.len())
+        let on = index
+            .at(p)
+            .into_iter()
             .filter(|&k| {
                 let (lo, hi) = boxes[k];
                 p[0] >= lo[0]
@@ -294,23 +315,28 @@ pub(crate) fn open_runs(
     contours: &[&Contour],
     tol: f64,
 ) -> (Vec<Open>, Option<(Vec<usize>, String)>) {
-    type Boxed = (([f64; 2], [f64; 2]), Vec<[f64; 2]>);
-    let flat: Vec<Boxed> = contours
+    if open.is_empty() {
+        return (open, None);
+    }
+    let boxes: Vec<([f64; 2], [f64; 2])> = contours
         .iter()
-        .map(|c| {
-            (
-                c.bounds().unwrap_or(([0.0; 2], [0.0; 2])),
-                c.flatten(tol / 4.0),
-            )
-        })
+        .map(|c| c.bounds().unwrap_or(([0.0; 2], [0.0; 2])))
         .collect();
+    let index = BoxIndex::new(&boxes, tol);
+    // each contour flattened once, when a loose end first comes near it
+    let flat: Vec<std::cell::OnceCell<Vec<[f64; 2]>>> =
+        contours.iter().map(|_| std::cell::OnceCell::new()).collect();
     let on_contour = |p: [f64; 2]| {
-        flat.iter().any(|((lo, hi), f)| {
+        index.at(p).into_iter().any(|k| {
+            let (lo, hi) = boxes[k];
             p[0] >= lo[0] - tol
                 && p[1] >= lo[1] - tol
                 && p[0] <= hi[0] + tol
                 && p[1] <= hi[1] + tol
-                && sv_geom::planar::boundary_distance(p, f) <= tol * 1.25
+                && sv_geom::planar::boundary_distance(
+                    p,
+                    flat[k].get_or_init(|| contours[k].flatten(tol / 4.0)),
+                ) <= tol * 1.25
         })
     };
     let (attached, loose): (Vec<Open>, Vec<Open>) = open
