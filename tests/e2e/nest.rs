@@ -62,6 +62,12 @@ fn dxf_parts_nest_inside_the_sheet_and_open_contours_are_left_out() {
         .map(|s| s["placements"].as_array().unwrap().len())
         .sum();
     assert_eq!(placed, 3, "every part placed exactly once");
+    // how far the search went is a record of the run: timings.json, not nest.json
+    assert!(report.get("search").is_none(), "{report}");
+    let timings = read_json(&dir.join("n/timings.json"));
+    assert_eq!(timings["nest_search"]["work_budget"], 100_000, "{timings}");
+    assert_eq!(timings["nest_search"]["cut_by_time"], false, "{timings}");
+    assert!(num(&timings["total"], "total") >= num(&timings["nest"], "nest"));
     let lb = report["lower_bound_sheets"].as_u64().unwrap();
     assert!(lb as usize <= report["sheets"].as_array().unwrap().len());
     for s in report["sheets"].as_array().unwrap() {

@@ -43,6 +43,10 @@ pub struct Timings {
     pub report: f64,
     /// The whole command, reading and writing included.
     pub total: f64,
+    /// How far the nesting's search went in that time: its work budget, the work done and
+    /// whether the clock cut it (`sv_nest::SearchReport`; a record of the run, so here
+    /// and not in `nest.json`).
+    pub nest_search: sv_nest::SearchReport,
 }
 
 /// The options of each stage, derived from the config and checked.
@@ -367,6 +371,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         nest: nest_s,
         report: report_s,
         total: started.elapsed().as_secs_f64(),
+        nest_search: nested.report.search.clone(),
     };
     let timings_json = serde_json::to_string_pretty(&timings)?;
     let strips_path = strips_dir.commit()?;

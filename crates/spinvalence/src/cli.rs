@@ -120,7 +120,7 @@ nest.json's left_out; the others still nest (exit code 0). The layout is decided
 work budget (collision evaluations: --nest-evaluations, else derived from --nest-seconds
 and the parts), so the same files, options and seed give the same sheets on every machine;
 --nest-seconds caps the wall time of the whole stage, and when it cuts the search short the
-summary, a warning line and nest.json's search.cut_by_time say so.";
+summary, a warning line and DIR/timings.json's nest_search.cut_by_time say so.";
 
 /// `spinvalence nest`.
 #[derive(Debug, Args)]

@@ -5,6 +5,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Result};
+use serde::Serialize;
 use sv_export::{CutDirection, EtchOrder, SheetPart, ShopConvention};
 use sv_nest::sheets::LeftOut;
 use sv_nest::{NestOptions, Part, RotationMode, StockSheet, StripInstance, StripOptions};
@@ -103,8 +104,21 @@ fn check(args: &NestArgs) -> Result<()> {
     Ok(())
 }
 
+/// `DIR/timings.json` of `nest`: wall seconds and how far the search went (a record of
+/// the run, so not in `nest.json`, which the work budget makes the same on every run).
+#[derive(Serialize)]
+struct NestTimings<'a> {
+    /// The nesting stage: set-up, construction, search, drawing the sheets.
+    nest: f64,
+    /// The whole command, reading the parts and writing the files included.
+    total: f64,
+    /// The search's work budget, the work done and whether the clock cut it.
+    nest_search: &'a sv_nest::SearchReport,
+}
+
 /// Run `nest`.
 pub fn run(args: &NestArgs) -> Result<()> {
+    let started = Instant::now();
     check(args)?;
     let json: Vec<&Path> = args
         .parts
@@ -194,7 +208,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
             bail!("invalid --thickness {t}: must be a positive length in mm");
         }
     }
-    let files = AtomicFiles::create(&args.out, &["nest.json"])?;
+    let files = AtomicFiles::create(&args.out, &["nest.json", "timings.json"])?;
     let sheet_dir = AtomicDir::create(&args.out, "sheets")?;
     let options = NestOptions {
         sheets,
@@ -206,8 +220,9 @@ pub fn run(args: &NestArgs) -> Result<()> {
         max_evaluations: args.nest_evaluations,
         ..NestOptions::default()
     };
-    let started = Instant::now();
+    let stage_started = Instant::now();
     let mut stage = crate::sheets::run(&parts, &options, args.thickness, &convention, args.quiet)?;
+    let stage_s = stage_started.elapsed().as_secs_f64();
     stage.report.left_out.extend(left_out);
     let report = &stage.report;
     // one line per part left out, even with --quiet: the others were nested without it
@@ -224,8 +239,13 @@ pub fn run(args: &NestArgs) -> Result<()> {
     let mut json = serde_json::to_value(report)?;
     json["notes"] = serde_json::to_value(&notes)?;
     let json = serde_json::to_string_pretty(&json)?;
+    let timings = serde_json::to_string_pretty(&NestTimings {
+        nest: stage_s,
+        total: started.elapsed().as_secs_f64(),
+        nest_search: &report.search,
+    })?;
     sheet_dir.commit()?;
-    files.commit(&[&json])?;
+    files.commit(&[&json, &timings])?;
     if !args.quiet {
         let mut rows: Vec<Vec<String>> = vec![vec!["parts".into(), parts.len().to_string()]];
         rows.extend(crate::sheets::summary_rows(report, args.nest_seconds));

@@ -10,7 +10,6 @@
 //! normal equations (2x2 blocks, one per unit and per link) and factors them with faer's
 //! sparse Cholesky, whose symbolic analysis is done once.
 
-use rayon::prelude::*;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
@@ -18,6 +17,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{Pair, SparseColMat, SymbolicSparseColMat};
 use faer::{Conj, Par};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use sv_geom::{segment_closest, Point3, Real, Vector3};
 use sv_unit::{AxisCase, CutWidths, Deployment, Side};

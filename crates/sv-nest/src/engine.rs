@@ -28,7 +28,8 @@ pub(crate) const CDE_CONFIG: CDEConfig = CDEConfig {
     cd_threshold: 16,
     item_surrogate_config: SPSurrogateConfig {
         n_pole_limits: [(64, 0.0), (16, 0.8), (8, 0.9)],
-        ff_pole_area_ratio: 0.0,
+        // the poles checked first, covering half the shape (sparrow's screening)
+        ff_pole_area_ratio: 0.5,
         n_ff_piers: 0,
     },
 };
@@ -708,10 +709,12 @@ impl Bin {
             acc > upper
         };
         let skip = SkipPk(self.members[i].pk);
-        let _ = self
-            .layout
-            .cde()
-            .collect_poly_collisions_until(shape, &skip, collector, &mut add);
+        let cde = self.layout.cde();
+        // the largest poles first (sparrow): a deep overlap is found, and the sample given
+        // up, before the edges are traced
+        if !cde.collect_surrogate_collisions_until(shape, &skip, collector, &mut add) {
+            let _ = cde.collect_poly_collisions_until(shape, &skip, collector, &mut add);
+        }
         acc
     }
 

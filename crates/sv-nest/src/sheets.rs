@@ -215,7 +215,11 @@ pub struct LeftOut {
     pub reason: String,
 }
 
-/// How far the search went (`nest.json` `search`; all zero in files written before it).
+/// How far the search went: the work budget, the work done, whether the clock cut it.
+/// A record of the run, not of the layout: on a busy machine the clock may cut the search
+/// and still leave the same sheets, so it is not in `nest.json` (which the same parts,
+/// options and work budget make byte for byte the same on every run) but in the command's
+/// `timings.json` (`nest_search`), beside the stage's seconds.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct SearchReport {
@@ -259,8 +263,9 @@ pub struct NestReport {
     pub left_out: Vec<LeftOut>,
     /// offcut of the last sheet
     pub offcut: Option<Offcut>,
-    /// the work budget and what was done of it
-    #[serde(default)]
+    /// the work budget and what was done of it: not written to `nest.json` (see
+    /// [`SearchReport`])
+    #[serde(skip)]
     pub search: SearchReport,
 }
 

@@ -96,7 +96,17 @@ fn distance(a: &[[f64; 2]], b: &[[f64; 2]], reach: f64) -> (f64, [f64; 2]) {
         if !near(&bb, p, q) {
             continue;
         }
+        // two segments whose boxes are farther apart than `reach` are farther apart
+        let pq = [
+            p[0].min(q[0]),
+            p[1].min(q[1]),
+            p[0].max(q[0]),
+            p[1].max(q[1]),
+        ];
         for &(r, s) in &b_near {
+            if !near(&pq, r, s) {
+                continue;
+            }
             let d = segment_distance(p, q, r, s);
             if d < best.0 {
                 best = (d, p);

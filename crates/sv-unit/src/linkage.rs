@@ -86,6 +86,11 @@ impl Linkage {
                 .iter()
                 .fold(0.0, |a: Real, e| a.max(e.abs()))
         };
+        // the damped step's merit: the sum of squared leg errors
+        let merit =
+            |r: &Matrix3, p: &Vector3| self.leg_errors(r, p).iter().map(|e| e * e).sum::<Real>();
+        // the merit at (r, p), carried from the step that got there
+        let mut now = merit(&r, &p);
         for _ in 0..60 {
             let mut c = nalgebra::Vector4::zeros();
             let mut jac = Matrix4x6::zeros();
@@ -121,18 +126,16 @@ impl Linkage {
             };
             let step = -(jac.transpose() * chol.solve(&c));
             // damped: halve the step until the leg errors fall
-            let merit = |r: &Matrix3, p: &Vector3| {
-                self.leg_errors(r, p).iter().map(|e| e * e).sum::<Real>()
-            };
-            let now = merit(&r, &p);
             let mut k = 1.0;
             loop {
                 let omega = Vector3::new(step[0], step[1], step[2]) * (k / size);
                 let rn = nalgebra::Rotation3::new(omega).into_inner() * r;
                 let pn = p + Vector3::new(step[3], step[4], step[5]) * k;
-                if merit(&rn, &pn) < now || k < 1e-3 {
+                let next = merit(&rn, &pn);
+                if next < now || k < 1e-3 {
                     r = rn;
                     p = pn;
+                    now = next;
                     break;
                 }
                 k /= 2.0;

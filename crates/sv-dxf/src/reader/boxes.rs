@@ -48,9 +48,7 @@ impl BoxIndex {
         // at most about 4 cells per box on average, and never a cell finer than the
         // extent allows for a grid of a few million cells
         let cap = (4 * boxes.len()).clamp(1, 1 << 22) as f64;
-        let cell = sizes[sizes.len() / 2]
-            .max(span / cap.sqrt())
-            .max(1e-9);
+        let cell = sizes[sizes.len() / 2].max(span / cap.sqrt()).max(1e-9);
         index.cell = cell;
         index.cols = (((hi[0] - lo[0]) / cell).floor() as usize + 1).max(1);
         index.rows = (((hi[1] - lo[1]) / cell).floor() as usize + 1).max(1);
@@ -138,12 +136,19 @@ mod tests {
             let got = index.at(p);
             for (i, b) in boxes.iter().enumerate() {
                 if holds(b, p) {
-                    assert!(got.contains(&i), "{p:?}: box {i} {b:?} missing from {got:?}");
+                    assert!(
+                        got.contains(&i),
+                        "{p:?}: box {i} {b:?} missing from {got:?}"
+                    );
                 }
             }
         }
         // a point inside one plate lists a few boxes, not all of them
-        assert!(index.at([70.0, 50.0]).len() <= 8, "{:?}", index.at([70.0, 50.0]));
+        assert!(
+            index.at([70.0, 50.0]).len() <= 8,
+            "{:?}",
+            index.at([70.0, 50.0])
+        );
     }
 
     #[test]

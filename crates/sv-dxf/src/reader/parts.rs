@@ -324,8 +324,10 @@ pub(crate) fn open_runs(
         .collect();
     let index = BoxIndex::new(&boxes, tol);
     // each contour flattened once, when a loose end first comes near it
-    let flat: Vec<std::cell::OnceCell<Vec<[f64; 2]>>> =
-        contours.iter().map(|_| std::cell::OnceCell::new()).collect();
+    let flat: Vec<std::cell::OnceCell<Vec<[f64; 2]>>> = contours
+        .iter()
+        .map(|_| std::cell::OnceCell::new())
+        .collect();
     let on_contour = |p: [f64; 2]| {
         index.at(p).into_iter().any(|k| {
             let (lo, hi) = boxes[k];
