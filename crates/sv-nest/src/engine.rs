@@ -19,6 +19,7 @@ use jagua_rs::geometry::{DTransformation, OriginalShape};
 use rand::seq::SliceRandom;
 use rand::Rng;
 use rand_xoshiro::Xoshiro256PlusPlus;
+use rayon::prelude::*;
 
 pub(crate) type Rng64 = Xoshiro256PlusPlus;
 
@@ -245,16 +246,31 @@ fn sample_in(rb: Rect, rot: f32, area: Rect, rng: &mut Rng64) -> Option<DTransfo
     Some(DTransformation::new(rot, (tx, ty)))
 }
 
-/// A transformation with rotation `rot` whose rotated bbox (`rb` about the origin) has its
-/// centre uniform in `focus`, clamped so the bbox lies in `area`.
-fn sample_around(rb: Rect, rot: f32, focus: Rect, area: Rect, rng: &mut Rng64) -> DTransformation {
-    let cx = rng.random_range(focus.x_min..=focus.x_max.max(focus.x_min));
-    let cy = rng.random_range(focus.y_min..=focus.y_max.max(focus.y_min));
-    let t = (
-        cx - 0.5 * (rb.x_min + rb.x_max),
-        cy - 0.5 * (rb.y_min + rb.y_max),
+/// A transformation with rotation `rot` whose translation (the item's reference point) is
+/// uniform in `focus` (the item's current box) and keeps the rotated bbox `rb` inside
+/// `area` (sparrow's focussed sampler); `None` when no such translation exists.
+fn sample_around(
+    rb: Rect,
+    rot: f32,
+    focus: Rect,
+    area: Rect,
+    rng: &mut Rng64,
+) -> Option<DTransformation> {
+    let (x0, x1) = (
+        focus.x_min.max(area.x_min - rb.x_min),
+        focus.x_max.min(area.x_max - rb.x_max),
     );
-    clamp_in(rb, rot, t, area)
+    let (y0, y1) = (
+        focus.y_min.max(area.y_min - rb.y_min),
+        focus.y_max.min(area.y_max - rb.y_max),
+    );
+    if x1 < x0 || y1 < y0 {
+        return None;
+    }
+    Some(DTransformation::new(
+        rot,
+        (rng.random_range(x0..=x1), rng.random_range(y0..=y1)),
+    ))
 }
 
 /// Clamps a transformation so the rotated bbox `rb` stays inside `area` where possible.
@@ -286,29 +302,88 @@ fn closest_allowed(item: &Item, dt: DTransformation) -> DTransformation {
     DTransformation::new(r, dt.translation())
 }
 
-/// Overlap of two shapes as in sparrow (Gardeyn & Wauters): a pole-based proxy of the overlap
-/// area, where pole pairs that just touch or miss still count a little (penetration depth
-/// decayed below `eps` = 1 % of the larger diameter), square-rooted and scaled by the geometric
-/// mean of the shapes' sizes, so a collision between two big items weighs more than between two
-/// small ones and the proxy never drops to zero while they collide.
+/// [`pair_overlap_with`] loading `a`'s poles.
+#[cfg(test)]
 fn pair_overlap(a: &SPolygon, b: &SPolygon) -> f32 {
+    let mut cols = PoleColumns::default();
+    cols.load(a);
+    pair_overlap_with(a, &cols, b)
+}
+
+/// The overlap of two shapes as in sparrow (Gardeyn & Wauters), with `a`'s poles in
+/// columns (`cols`): a pole-based proxy of the overlap area, where pole pairs that just
+/// touch or miss still count a little (penetration depth decayed below `eps` = 1 % of the
+/// larger diameter), square-rooted and scaled by the geometric mean of the shapes' sizes,
+/// so a collision between two big items weighs more than between two small ones and the
+/// proxy never drops to zero while they collide.
+fn pair_overlap_with(a: &SPolygon, cols: &PoleColumns, b: &SPolygon) -> f32 {
     let eps = a.diameter().max(b.diameter()) * 0.01;
-    let mut s = 0.0;
-    for p in &a.surrogate().poles {
-        for q in &b.surrogate().poles {
-            let dx = p.center.0 - q.center.0;
-            let dy = p.center.1 - q.center.1;
-            let pd = p.radius + q.radius - (dx * dx + dy * dy).sqrt();
-            let pd = if pd >= eps {
-                pd
-            } else {
-                eps * eps / (2.0 * eps - pd)
-            };
-            s += pd * p.radius.min(q.radius);
+    let proxy = std::f32::consts::PI * cols.overlap(b, eps) + eps * eps;
+    proxy.sqrt() * size_penalty(a, b)
+}
+
+/// The scratch of a collision query: the hazards found and the queried shape's poles.
+#[derive(Default)]
+pub(crate) struct Probe {
+    collector: BasicHazardCollector,
+    poles: PoleColumns,
+}
+
+/// Lanes of [`PoleColumns`]: the pole pairs of two shapes are summed this many at a time.
+const LANES: usize = 8;
+
+/// One shape's poles as columns of centres and radii, padded to whole [`LANES`] with
+/// poles of radius 0 (which add nothing), so that the sum over every pair of poles of two
+/// shapes, the hot loop of the separator, runs on vector lanes.
+#[derive(Default)]
+pub(crate) struct PoleColumns {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    r: Vec<f32>,
+}
+
+impl PoleColumns {
+    /// Loads `s`'s poles.
+    fn load(&mut self, s: &SPolygon) {
+        let poles = &s.surrogate().poles;
+        let n = poles.len().div_ceil(LANES) * LANES;
+        for v in [&mut self.x, &mut self.y, &mut self.r] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+        for (k, p) in poles.iter().enumerate() {
+            self.x[k] = p.center.0;
+            self.y[k] = p.center.1;
+            self.r[k] = p.radius;
         }
     }
-    let proxy = std::f32::consts::PI * s + eps * eps;
-    proxy.sqrt() * size_penalty(a, b)
+
+    /// The sum over every pole pair of these poles and `b`'s of the penetration depth
+    /// (decayed below `eps`) times the smaller radius.
+    fn overlap(&self, b: &SPolygon, eps: f32) -> f32 {
+        let mut acc = [0.0f32; LANES];
+        let lanes = self
+            .x
+            .chunks_exact(LANES)
+            .zip(self.y.chunks_exact(LANES))
+            .zip(self.r.chunks_exact(LANES));
+        for q in &b.surrogate().poles {
+            let (qx, qy, qr) = (q.center.0, q.center.1, q.radius);
+            for ((x, y), r) in lanes.clone() {
+                for l in 0..LANES {
+                    let (dx, dy) = (x[l] - qx, y[l] - qy);
+                    let pd = r[l] + qr - (dx * dx + dy * dy).sqrt();
+                    let pd = if pd >= eps {
+                        pd
+                    } else {
+                        eps * eps / (2.0 * eps - pd)
+                    };
+                    acc[l] += pd * r[l].min(qr);
+                }
+            }
+        }
+        acc.iter().sum()
+    }
 }
 
 /// Geometric mean of the square roots of the convex hull areas.
@@ -687,18 +762,25 @@ impl Bin {
         shape: &SPolygon,
         gls: Option<&Gls>,
         upper: f32,
-        collector: &mut BasicHazardCollector,
+        probe: &mut Probe,
     ) -> f32 {
+        let Probe { collector, poles } = probe;
         collector.clear();
         let mut acc = 0.0;
         let placed = self.layout.placed_items();
         let n = self.members.len();
+        // the shape's poles in columns, loaded at its first collision
+        let mut loaded = false;
         let mut add = |e: BasicHazardEntity| {
             match e {
                 BasicHazardEntity::PlacedItem { pk, .. } => {
                     let j = self.idx_of[&pk];
                     let w = gls.map_or(1.0, |g| g.get(i, j));
-                    acc += w * pair_overlap(shape, placed[pk].shape());
+                    if !loaded {
+                        poles.load(shape);
+                        loaded = true;
+                    }
+                    acc += w * pair_overlap_with(shape, poles, placed[pk].shape());
                 }
                 BasicHazardEntity::Exterior => {
                     let w = gls.map_or(1.0, |g| g.get(i, n));
@@ -719,7 +801,8 @@ impl Bin {
     }
 
     /// Per-pair overlaps `(i, j, overlap)` with `j == n` for the exterior.
-    fn overlaps(&self, collector: &mut BasicHazardCollector) -> Vec<(usize, usize, f32)> {
+    fn overlaps(&self, probe: &mut Probe) -> Vec<(usize, usize, f32)> {
+        let Probe { collector, poles } = probe;
         let n = self.members.len();
         let placed = self.layout.placed_items();
         let mut out = Vec::new();
@@ -736,7 +819,8 @@ impl Bin {
                     BasicHazardEntity::PlacedItem { pk, .. } => {
                         let j = self.idx_of[pk];
                         if j > i {
-                            out.push((i, j, pair_overlap(shape, placed[*pk].shape())));
+                            poles.load(shape);
+                            out.push((i, j, pair_overlap_with(shape, poles, placed[*pk].shape())));
                         }
                     }
                     BasicHazardEntity::Exterior => {
@@ -758,11 +842,11 @@ impl Bin {
         gls: &Gls,
         rng: &mut Rng64,
         budget: &mut Budget,
-        collector: &mut BasicHazardCollector,
+        probe: &mut Probe,
     ) {
         let item = Arc::clone(&self.members[i].item);
         let cur = self.members[i].dt;
-        let cur_cost = self.eval(i, self.placed_shape(i), Some(gls), f32::MAX, collector);
+        let cur_cost = self.eval(i, self.placed_shape(i), Some(gls), f32::MAX, probe);
         if cur_cost <= 0.0 {
             return;
         }
@@ -775,20 +859,13 @@ impl Bin {
             RotationRange::Continuous
         );
         let mut buf: SPolygon = item.shape_cd().as_ref().clone();
-        // one box cache for the samplers, one inside the evaluation (descent steps leave the
-        // container unless clamped)
         let mut boxes = RotBoxes::new(item.shape_cd());
-        let mut eval_boxes = RotBoxes::new(item.shape_cd());
+        // a place partly outside the container is evaluated as it is: the exterior's
+        // overlap keeps the descent inside (sparrow)
         let mut evaluate = |dt: DTransformation, upper: f32| {
-            let dt = clamp_in(
-                eval_boxes.get(dt.rotation()),
-                dt.rotation(),
-                dt.translation(),
-                bounds,
-            );
             budget.evals += 1;
             buf.transform_from(item.shape_cd(), &dt.compose());
-            self.eval(i, &buf, Some(gls), upper, collector)
+            self.eval(i, &buf, Some(gls), upper, probe)
         };
         let mut best = BestSamples::new(3, 0.05 * min_dim);
         best.report(cur, cur_cost);
@@ -796,7 +873,7 @@ impl Bin {
             let rot = sample_rotation(&item, rng);
             let rb = boxes.get(rot);
             let dt = if k < 25 {
-                Some(sample_around(rb, rot, focus, bounds, rng))
+                sample_around(rb, rot, focus, bounds, rng)
             } else {
                 sample_in(rb, rot, bounds, rng)
             };
@@ -827,12 +904,6 @@ impl Bin {
             return;
         };
         let (e, dt) = descend(start, fine, &mut evaluate, rng);
-        let dt = clamp_in(
-            boxes.get(dt.rotation()),
-            dt.rotation(),
-            dt.translation(),
-            bounds,
-        );
         if e < cur_cost && dt != cur {
             self.relocate(i, dt);
         }
@@ -865,8 +936,8 @@ impl Bin {
     ) -> f32 {
         let n = self.members.len();
         let mut gls = Gls::new(n);
-        let mut collector = BasicHazardCollector::new();
-        let mut ov = self.overlaps(&mut collector);
+        let mut probe = Probe::default();
+        let mut ov = self.overlaps(&mut probe);
         if ov.is_empty() {
             return 0.0;
         }
@@ -888,9 +959,9 @@ impl Bin {
                 ov = if self.workers <= 1 {
                     colliding.shuffle(rng);
                     for &i in &colliding {
-                        self.move_item(i, &gls, rng, budget, &mut collector);
+                        self.move_item(i, &gls, rng, budget, &mut probe);
                     }
-                    self.overlaps(&mut collector)
+                    self.overlaps(&mut probe)
                 } else {
                     self.move_pass_on_workers(&colliding, &gls, rng, budget)
                 };
@@ -916,7 +987,7 @@ impl Bin {
             }
             // every round ends in the least-overlapping state (also when it is the last)
             self.restore(&best_snap);
-            ov = self.overlaps(&mut collector);
+            ov = self.overlaps(&mut probe);
         }
         min_loss
     }
@@ -936,13 +1007,13 @@ impl Bin {
         let n = self.members.len();
         let run = move |bin: &mut Bin, seed: u64, mut b: Budget| {
             let mut rng = <Rng64 as rand::SeedableRng>::seed_from_u64(seed);
-            let mut collector = BasicHazardCollector::new();
+            let mut probe = Probe::default();
             let mut order = colliding.to_vec();
             order.shuffle(&mut rng);
             for &i in &order {
-                bin.move_item(i, gls, &mut rng, &mut b, &mut collector);
+                bin.move_item(i, gls, &mut rng, &mut b, &mut probe);
             }
-            let overlaps = bin.overlaps(&mut collector);
+            let overlaps = bin.overlaps(&mut probe);
             let loss = overlaps
                 .iter()
                 .map(|&(i, j, o)| gls.get(i, j.min(n)) * o)
@@ -954,23 +1025,18 @@ impl Bin {
             }
         };
         let mut copies: Vec<Bin> = (1..self.workers).map(|_| self.clone()).collect();
-        let mut passes: Vec<Pass> = std::thread::scope(|scope| {
-            let handles: Vec<_> = copies
-                .iter_mut()
-                .zip(&seeds[1..])
-                .map(|(bin, &seed)| {
-                    let b = budget.helper();
-                    scope.spawn(move || run(bin, seed, b))
-                })
-                .collect();
-            let mut passes = vec![run(self, seeds[0], budget.helper())];
-            passes.extend(
-                handles
-                    .into_iter()
-                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
-            );
-            passes
-        });
+        // on the thread pool (no thread started per pass); in worker order
+        let budgets: Vec<Budget> = (0..self.workers).map(|_| budget.helper()).collect();
+        let mut bins: Vec<&mut Bin> = std::iter::once(&mut *self)
+            .chain(copies.iter_mut())
+            .collect();
+        let mut passes: Vec<Pass> = bins
+            .par_iter_mut()
+            .zip(seeds.par_iter())
+            .zip(budgets.into_par_iter())
+            .map(|((bin, &seed), b)| run(bin, seed, b))
+            .collect();
+        drop(bins);
         budget.evals += passes.iter().map(|p| p.evals).sum::<u64>();
         let best = (1..passes.len()).fold(0, |b, k| {
             if passes[k].loss < passes[b].loss {
@@ -1091,6 +1157,15 @@ mod tests {
 
     /// An L-shaped item (not symmetric, so a turn by 180 degrees is a different placement).
     fn l_item(id: usize, s: f32, rotations: RotationRange) -> Arc<Item> {
+        l_item_with(id, s, rotations, CDE_CONFIG.item_surrogate_config)
+    }
+
+    fn l_item_with(
+        id: usize,
+        s: f32,
+        rotations: RotationRange,
+        surrogate: SPSurrogateConfig,
+    ) -> Arc<Item> {
         let pts = [
             (0.0, 0.0),
             (s, 0.0),
@@ -1107,17 +1182,7 @@ mod tests {
             modify_config: ShapeModifyConfig::default(),
         };
         let ao = AllowedOrientations::new(rotations, vec![]).unwrap();
-        Arc::new(
-            Item::new(
-                id,
-                id as u64,
-                orig,
-                ao,
-                None,
-                CDE_CONFIG.item_surrogate_config,
-            )
-            .unwrap(),
-        )
+        Arc::new(Item::new(id, id as u64, orig, ao, None, surrogate).unwrap())
     }
 
     fn placed(item: &Arc<Item>, x: f32, y: f32) -> SPolygon {
@@ -1149,6 +1214,42 @@ mod tests {
         let e2 = ext_overlap(&placed(&it, 28.0, 0.0), cont);
         let e3 = ext_overlap(&placed(&it, 40.0, 0.0), cont);
         assert!(0.0 < e1 && e1 < e2 && e2 < e3, "{e1} {e2} {e3}");
+    }
+
+    /// The pole pairs summed in lanes (padded with poles of radius 0) give the sum of the
+    /// plain double loop over the poles of both shapes.
+    #[test]
+    fn pole_columns_sum_every_pole_pair() {
+        // five poles each: the lanes are padded
+        let five = SPSurrogateConfig {
+            n_pole_limits: [(5, 0.0); 3],
+            ff_pole_area_ratio: 0.0,
+            n_ff_piers: 0,
+        };
+        let a = l_item_with(0, 10.0, RotationRange::None, five);
+        let b = l_item_with(1, 7.0, RotationRange::None, five);
+        let (pa, pb) = (placed(&a, 0.0, 0.0), placed(&b, 3.0, 1.0));
+        let n = pa.surrogate().poles.len();
+        assert!(
+            n > 1 && n % LANES != 0,
+            "{n} poles: the padding is not tried"
+        );
+        let eps = 0.1;
+        let mut plain = 0.0f64;
+        for p in &pa.surrogate().poles {
+            for q in &pb.surrogate().poles {
+                let d =
+                    f64::from(p.center.0 - q.center.0).hypot(f64::from(p.center.1 - q.center.1));
+                let pd = f64::from(p.radius + q.radius) - d;
+                let e = f64::from(eps);
+                let pd = if pd >= e { pd } else { e * e / (2.0 * e - pd) };
+                plain += pd * f64::from(p.radius.min(q.radius));
+            }
+        }
+        let mut cols = PoleColumns::default();
+        cols.load(&pa);
+        let lanes = f64::from(cols.overlap(&pb, eps));
+        assert!((lanes - plain).abs() <= 1e-5 * plain, "{lanes} vs {plain}");
     }
 
     #[test]
