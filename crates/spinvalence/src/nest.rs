@@ -138,7 +138,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
     let mut parts: Vec<SheetPart> = Vec::new();
     let mut left_out: Vec<LeftOut> = Vec::new();
     let mut notes: Vec<sv_dxf::Note> = Vec::new();
-    let mut stems: Vec<String> = Vec::new();
+    let mut stems: std::collections::HashSet<String> = std::collections::HashSet::new();
     for path in &args.parts {
         let name = path.display().to_string();
         let bytes = match output::read_bytes(path) {
@@ -158,7 +158,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
             .map(|s| s.to_string_lossy().into_owned())
             .filter(|s| !stems.contains(s) && !s.is_empty())
             .unwrap_or_else(|| name.clone());
-        stems.push(stem.clone());
+        stems.insert(stem.clone());
         match sv_dxf::read_dxf(&bytes, &stem, &read_options) {
             Ok(read) => {
                 // the parts with what they etch (labels and fold marks of a strip DXF)
