@@ -33,15 +33,21 @@ fn main() {
     for h in &units {
         print!(" boundary face planarity at {h} |");
     }
-    println!(" boundary-conjugate angle min (deg) |");
+    println!(" boundary-conjugate angle min (deg) | field s |");
     for file in &files {
         let name = std::path::Path::new(file)
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let target = read_obj(file);
+        let target = if file.starts_with("builtin:") {
+            sv_surface::builtin_target(file.trim_start_matches("builtin:")).expect("builtin")
+        } else {
+            read_obj(file)
+        };
         let index = TargetIndex::new(&target).expect("valid target");
+        let t = std::time::Instant::now();
         let field = cross_field(&index, alignment).expect("field");
+        let secs = t.elapsed().as_secs_f64();
         let v = &target.vertices;
         let sing: Vec<String> = field
             .singularities
@@ -92,6 +98,6 @@ fn main() {
         for h in &units {
             print!(" {:.4} |", worst * h);
         }
-        println!(" {conj_min:.1} |");
+        println!(" {conj_min:.1} | {secs:.3} |");
     }
 }
