@@ -25,6 +25,7 @@
 
 mod auto_layout;
 mod builtin;
+mod cross_field;
 mod error;
 mod layout;
 mod optimise;
@@ -36,6 +37,7 @@ mod target;
 mod topology;
 
 pub use builtin::{builtin_target, BUILTIN_NAMES, DEFAULT_BUILTIN};
+pub use cross_field::{cross_field, CrossField, DEFAULT_ALIGNMENT};
 pub use error::SurfaceError;
 pub use layout::layout_mesh;
 pub use optimise::optimise;

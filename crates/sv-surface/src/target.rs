@@ -356,6 +356,17 @@ impl<'a> TargetIndex<'a> {
         })
     }
 
+    /// The target this index answers for.
+    pub fn mesh(&self) -> &TargetMesh {
+        self.mesh
+    }
+
+    /// The boundary loops as target vertex indices, the outer (longest) first, each with
+    /// the surface on its left.
+    pub fn loops(&self) -> &[Vec<usize>] {
+        &self.loops
+    }
+
     /// Perimeter of the outer boundary loop.
     pub(crate) fn perimeter(&self) -> Real {
         *self.boundary_arc.last().unwrap_or(&0.0)
