@@ -408,3 +408,33 @@ fn nest_section_sets_the_sheets_and_bad_values_name_the_key() {
     out.expect_code(2);
     assert!(out.one_error_line().contains("seconds"), "{out:?}");
 }
+
+#[test]
+fn frame_overlap_is_read_or_refused_in_one_line_before_anything_is_written() {
+    let dir = Dir::new();
+    for toml in [
+        "[frame]\noverlap = \"sometimes\"\n",
+        "[frame]\noverlap = 10.0\n",
+        "[frame]\noverlap = -30\n",
+        "[frame]\noverlap = \"constant\"\n[joints]\nclose = false\n",
+    ] {
+        dir.write("bad.toml", toml);
+        let out = dir.run(&["build", "--config", "bad.toml", "--out", "bad"]);
+        out.expect_code(2);
+        assert!(out.one_error_line().contains("overlap"), "{toml}: {out:?}");
+        assert!(!dir.join("bad").exists(), "{toml}: nothing written");
+    }
+    // a length the welds take, and the rule, are read: the file fails at its next key
+    for toml in [
+        "[frame]\noverlap = 40\n",
+        "[frame]\noverlap = \"constant\"\n",
+    ] {
+        dir.write("good.toml", format!("{toml}[nest]\nmargin = -1.0\n"));
+        let out = dir.run(&["build", "--config", "good.toml", "--out", "bad"]);
+        out.expect_code(2);
+        assert!(
+            out.one_error_line().contains("nest.margin"),
+            "{toml}: {out:?}"
+        );
+    }
+}

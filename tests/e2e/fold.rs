@@ -170,7 +170,12 @@ fn a_pose_moved_2_mm_or_a_neck_moved_2_mm_fails_both_checks_naming_the_unit() {
     assert!(moved.success());
     let (code, stdout, fig) = fold_check(&dir);
     assert_eq!(code, 1, "{stdout}");
-    assert!(f(&fig, "leg_error_max") > 0.5, "{fig}");
+    // the necks moved with the slot: their legs change length, or (where the move runs
+    // across the legs) the necks leave their pins
+    assert!(
+        f(&fig, "leg_error_max") > 0.5 || f(&fig, "pin_offset_max") > 0.5,
+        "{fig}"
+    );
     assert!(stdout.contains(&format!("{strip}-")), "{strip}: {stdout}");
     // `spinvalence check DIR` reads the cut from the DXF too
     let checked = dir.run(&["check", "out"]);

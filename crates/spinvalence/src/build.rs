@@ -35,6 +35,8 @@ pub struct Timings {
     pub secondary: f64,
     /// Primary-surface solve.
     pub primary: f64,
+    /// Closing the joints (hub mesh and plates together).
+    pub joints: f64,
     /// Strips: unrolling, cut profiles, design-rule check, DXF and SVG.
     pub strips: f64,
     /// Nesting the strips onto sheets, sheet DXF and SVG.
@@ -101,6 +103,12 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
         bail!("invalid unit size {size}: must be a positive length in mm");
     }
     cfg.secondary.check().map_err(|e| anyhow!("{e}"))?;
+    if !cfg.joints.close && cfg.frame != crate::config::FrameConfig::default() {
+        bail!("frame: parameter overlap needs the joint solve ([joints] close = true)");
+    }
+    // a hub lap asked for must be one the welds take
+    cfg.frame
+        .overlap_target(&[], cfg.primary.min_overlap(&cfg.profile)?)?;
     let mut solve = cfg.primary.to_solve_options()?;
     let strips = cfg.strips.to_options()?;
     cfg.profile
@@ -257,7 +265,7 @@ fn weldable(solved: &sv_frame::Solved, min_overlap: f64, cfg: &BuildConfig) -> R
 
 pub fn run(args: &BuildArgs) -> Result<Outcome> {
     let started = Instant::now();
-    let (cfg, mut options) = resolve(args)?;
+    let (mut cfg, mut options) = resolve(args)?;
     let target = load_target(&cfg.target, cfg.secondary.unit_size, args.quiet)?;
     let layout = cfg.surface.layout.as_deref().map(load_layout).transpose()?;
     let files = AtomicFiles::create(&cfg.out, &FILES)?;
@@ -296,6 +304,81 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     let solved = solved.map_err(|e| anyhow!("{}: primary solve: {e}", cfg.target))?;
     let primary_s = t1.elapsed().as_secs_f64();
     let min_overlap = cfg.primary.min_overlap(&cfg.profile)?;
+
+    // close the joints: the hub mesh and every unit's plates moved together, so that the
+    // parts as cut meet (bridges fold, plates of neighbouring strips touch)
+    let t_joints = Instant::now();
+    let (mesh, solved, joints) = if cfg.joints.close {
+        let frame0 = solved.to_frame_file(&mesh);
+        let surface = sv_surface::TargetSurface::new(&target, &mesh)
+            .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
+        let p = &cfg.profile;
+        let overlap = cfg
+            .frame
+            .overlap_target(&solved.evaluation.overlaps, min_overlap)?;
+        let joint_options = sv_frame::JointOptions {
+            max_iterations: cfg.joints.max_iterations,
+            min_overlap,
+            overlap,
+            limits: p.joint_limits(),
+            bridge_width: p.neck_width,
+            bridge_room: 2.0 * p.neck_width,
+            thickness: p.thickness,
+            ..sv_frame::JointOptions::default()
+        };
+        // the strips' direction decides which joints are bridges: unless the command line
+        // names one, both are tried and the one whose joints hold better is kept
+        let first = cfg.strips.direction;
+        let directions = if cfg.joints.both_directions && args.strip_direction.is_none() {
+            vec![first, other_direction(first)]
+        } else {
+            vec![first]
+        };
+        let mut best: Option<(JointScore, sv_strips::StripDirection, Closed)> = None;
+        for direction in directions {
+            let strip_options = sv_strips::StripOptions {
+                direction,
+                ..options.strips.clone()
+            };
+            let bridges = sv_strips::bridged_links(&frame0, &strip_options)
+                .map_err(|e| anyhow!("{}: strips: {e}", cfg.target))?;
+            let what = format!("joints, strips along {}", direction_name(direction));
+            let bar = progress_bar(args.quiet, joint_options.max_iterations, &what);
+            let closed = sv_frame::close_joints(
+                &mesh,
+                &solved,
+                &surface,
+                &bridges,
+                &joint_options,
+                &mut |it, energy| {
+                    bar.set_position(it as u64);
+                    bar.set_message(format!("residual {energy:.3e}"));
+                },
+            );
+            finish(&bar);
+            let closed = closed.map_err(|e| anyhow!("{}: closing the joints: {e}", cfg.target))?;
+            let score = JointScore::of(&closed.1, &joint_options.limits);
+            if best.as_ref().is_none_or(|(s, _, _)| score.better_than(s)) {
+                best = Some((score, direction, closed));
+            }
+        }
+        let (_, direction, (mesh, solved, joint_report)) =
+            best.expect("at least one direction is tried");
+        options.strips.direction = direction;
+        cfg.strips.direction = direction;
+        // the hub mesh moved: its goals are measured again (conicality, the paper's stand-in
+        // for tiles that can meet, is not held where the joints themselves are closed)
+        let index = sv_surface::TargetIndex::new(&target).map_err(|e| anyhow!("{e}"))?;
+        let mut again = sv_surface::measure_hub_mesh(&index, &mesh, cfg.secondary.unit_size)
+            .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
+        again.unmet.retain(|u| !u.starts_with("conical"));
+        again.iterations = report.iterations;
+        report = again;
+        (mesh, solved, Some(joint_report))
+    } else {
+        (mesh, solved, None)
+    };
+    let joints_s = t_joints.elapsed().as_secs_f64();
     if let Err(short) = weldable(&solved, min_overlap, &cfg) {
         // on a hub mesh that met its goals the parameters are to blame: nothing is written;
         // on one that did not, short laps are one more unmet goal, and everything is written
@@ -367,6 +450,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     let timings = Timings {
         secondary: secondary_s,
         primary: primary_s,
+        joints: joints_s,
         strips: strips_s,
         nest: nest_s,
         report: report_s,
@@ -396,6 +480,12 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         let max = overlaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let unit = report.mean_edge;
         let mut rows = summary_rows(&cfg, &report, unit, &solved.report, (min, max), &timings);
+        if let Some(j) = &joints {
+            let at = rows.len() - 2;
+            let mut joint = joint_rows(j, cfg.strips.direction);
+            joint.push(open_joints_row(&frame));
+            rows.splice(at..at, joint);
+        }
         // the stage rows go before the last two (timings and total)
         let mut stage_rows = vec![vec![
             "strips".into(),
@@ -460,6 +550,157 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     })
 }
 
+/// What closing the joints gives: the moved hub mesh, the frame on it, and the report.
+type Closed = (sv_frame::QuadMesh, sv_frame::Solved, sv_frame::JointReport);
+
+fn direction_name(d: sv_strips::StripDirection) -> &'static str {
+    match d {
+        sv_strips::StripDirection::U => "u",
+        sv_strips::StripDirection::V => "v",
+    }
+}
+
+fn other_direction(d: sv_strips::StripDirection) -> sv_strips::StripDirection {
+    match d {
+        sv_strips::StripDirection::U => sv_strips::StripDirection::V,
+        sv_strips::StripDirection::V => sv_strips::StripDirection::U,
+    }
+}
+
+/// How well a frame's joints hold: how many are outside their limits, then the worst
+/// excess as a multiple of its limit.
+#[derive(Clone, Copy, Debug)]
+struct JointScore {
+    failing: usize,
+    worst: f64,
+}
+
+impl JointScore {
+    fn of(solved: &sv_frame::Solved, limits: &sv_frame::JointLimits) -> Self {
+        let records = solved.joints.as_ref().map_or(&[][..], |j| &j.records[..]);
+        Self {
+            failing: records.iter().filter(|j| !limits.holds(j)).count(),
+            worst: records.iter().map(|j| limits.excess(j)).fold(0.0, f64::max),
+        }
+    }
+
+    fn better_than(&self, other: &Self) -> bool {
+        (self.failing, self.worst) < (other.failing, other.worst)
+    }
+}
+
+/// The summary's rows of the joint solve: the worst bridge and weld, before and after.
+fn joint_rows(j: &sv_frame::JointReport, d: sv_strips::StripDirection) -> Vec<Vec<String>> {
+    let (a, b) = (&j.start, &j.end);
+    vec![
+        vec![
+            "bridges (in strips)".into(),
+            format!(
+                "strips along {}: apart {} -> {} mm, bent {:.1} -> {:.1} deg, twisted {:.1} -> {:.1} deg",
+                direction_name(d),
+                number(a.bridge_gap),
+                number(b.bridge_gap),
+                a.bridge_bend.to_degrees(),
+                b.bridge_bend.to_degrees(),
+                a.bridge_twist.to_degrees(),
+                b.bridge_twist.to_degrees()
+            ),
+        ],
+        vec![
+            "welds (between strips)".into(),
+            format!(
+                "apart {} -> {} mm, plates into each other {} -> {} mm ({} iterations)",
+                number(a.weld_gap),
+                number(b.weld_gap),
+                number(a.collision),
+                number(b.collision),
+                j.iterations
+            ),
+        ],
+    ]
+}
+
+/// The summary's row of the joints outside their limits: how many of each kind, the worst
+/// three by their excess over the limit (naming the units), and what would help.
+fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
+    let limits = frame.params.joint_limits.unwrap_or_default();
+    let mut open: Vec<(f64, String)> = Vec::new();
+    let (mut bridges, mut welds) = (0, 0);
+    let mut cut = Vec::new();
+    for l in &frame.links {
+        let Some(j) = l.joint else { continue };
+        let strip = |u: usize| frame.units.get(u).map(|r| r.strip.as_str());
+        if j.kind == sv_frame::JointKind::Bridge && strip(l.units[0]) != strip(l.units[1]) {
+            let id = |u: usize| frame.units.get(u).map_or("?", |r| r.id.as_str());
+            cut.push(format!("{} - {}", id(l.units[0]), id(l.units[1])));
+        }
+        if limits.holds(&j) {
+            continue;
+        }
+        let id = |u: usize| frame.units.get(u).map_or("?", |r| r.id.as_str());
+        let name = format!("{} - {}", id(l.units[0]), id(l.units[1]));
+        let (excess, what) = match j.kind {
+            sv_frame::JointKind::Bridge => {
+                bridges += 1;
+                let worst = [
+                    (
+                        j.gap / limits.bridge_gap,
+                        format!("apart {} mm", number(j.gap)),
+                    ),
+                    (
+                        j.bend.abs() / limits.bend,
+                        format!("bent {:.1} deg", j.bend.abs().to_degrees()),
+                    ),
+                    (
+                        j.twist.abs() / limits.twist,
+                        format!("twisted {:.1} deg", j.twist.abs().to_degrees()),
+                    ),
+                ];
+                worst
+                    .into_iter()
+                    .fold((0.0, String::new()), |a, b| if b.0 > a.0 { b } else { a })
+            }
+            sv_frame::JointKind::Weld => {
+                welds += 1;
+                if j.gap / limits.weld_gap >= j.collision / limits.collision {
+                    (
+                        j.gap / limits.weld_gap,
+                        format!("apart {} mm", number(j.gap)),
+                    )
+                } else {
+                    (
+                        j.collision / limits.collision,
+                        format!("{} mm into each other", number(j.collision)),
+                    )
+                }
+            }
+        };
+        open.push((excess, format!("{name} {what}")));
+    }
+    open.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut text = if open.is_empty() {
+        "none: every bridge and weld within its limits".to_string()
+    } else {
+        let worst: Vec<&str> = open.iter().take(3).map(|(_, s)| s.as_str()).collect();
+        format!(
+            "{bridges} bridges, {welds} welds of {} (worst: {}); more [joints] max_iterations, \
+             the other --strip-direction or a larger unit size may close them",
+            frame.links.len(),
+            worst.join("; ")
+        )
+    };
+    if !cut.is_empty() {
+        // the tiles the solve stretched made a piece longer than the sheet: the strips
+        // stage cut it at a joint closed as a bridge, welded on site instead
+        text.push_str(&format!(
+            "; {} bridges cut for the sheet length, welded on site at their fold ({})",
+            cut.len(),
+            cut.join(", ")
+        ));
+    }
+    vec!["joints outside limits".into(), text]
+}
+
 fn finish(bar: &ProgressBar) {
     bar.finish_and_clear();
 }
@@ -516,13 +757,18 @@ fn summary_rows(
         ],
         [
             "hub overlap".into(),
-            format!("{} .. {}", mm(overlap.0), mm(overlap.1)),
+            format!(
+                "{} .. {} (spread {})",
+                mm(overlap.0),
+                mm(overlap.1),
+                mm(overlap.1 - overlap.0)
+            ),
         ],
         [
-            "time secondary / primary / strips / nest / report".into(),
+            "time secondary / primary / joints / strips / nest / report".into(),
             format!(
-                "{:.3} s / {:.3} s / {:.3} s / {:.3} s / {:.3} s",
-                t.secondary, t.primary, t.strips, t.nest, t.report
+                "{:.3} s / {:.3} s / {:.3} s / {:.3} s / {:.3} s / {:.3} s",
+                t.secondary, t.primary, t.joints, t.strips, t.nest, t.report
             ),
         ],
         [

@@ -16,6 +16,12 @@
 //! expansion = 1.0
 //! side = "auto"
 //!
+//! [joints]                      # closing the joints (sv_frame::close_joints)
+//! close = true
+//!
+//! [frame]                       # what the closed frame holds
+//! overlap = "free"              # or "constant", or a hub lap in mm
+//!
 //! [strips]                      # strips and unrolling (sv_strips::StripOptions)
 //! direction = "u"
 //!
@@ -58,6 +64,10 @@ pub struct BuildConfig {
     pub secondary: SecondaryOptions,
     /// Primary-surface solve options.
     pub primary: PrimaryConfig,
+    /// Closing the joints: the hub mesh and the plates moved together.
+    pub joints: JointsConfig,
+    /// What the closed frame holds.
+    pub frame: FrameConfig,
     /// Strip partition and unrolling.
     pub strips: StripsConfig,
     /// Cut profile of every part (mm).
@@ -206,9 +216,120 @@ impl Default for BuildConfig {
             surface: SurfaceConfig::default(),
             secondary: SecondaryOptions::default(),
             primary: PrimaryConfig::default(),
+            joints: JointsConfig::default(),
+            frame: FrameConfig::default(),
             strips: StripsConfig::default(),
             profile: ProfileParams::default(),
             nest: NestConfig::default(),
+        }
+    }
+}
+
+/// `[frame]`: what the closed frame holds (docs/geometry.md 6.5).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FrameConfig {
+    /// The hub laps: `"free"` (any length above the weld minimum), `"constant"` (one length
+    /// for every link, the primary solve's median lap or the weld minimum, whichever is
+    /// longer: one gauge block checks every hub joint on site) or that length in mm.
+    pub overlap: Overlap,
+}
+
+impl Default for FrameConfig {
+    fn default() -> Self {
+        Self {
+            overlap: Overlap::Rule(OverlapRule::Free),
+        }
+    }
+}
+
+/// `[frame] overlap`: a rule or a length (mm).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged, try_from = "OverlapText")]
+pub enum Overlap {
+    /// `"free"` or `"constant"`.
+    Rule(OverlapRule),
+    /// One hub lap for every link (mm).
+    Length(f64),
+}
+
+/// `[frame] overlap` as written: a word or a number.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum OverlapText {
+    Word(String),
+    Number(f64),
+}
+
+impl TryFrom<OverlapText> for Overlap {
+    type Error = String;
+
+    fn try_from(text: OverlapText) -> Result<Self, String> {
+        match text {
+            OverlapText::Word(w) if w == "free" => Ok(Overlap::Rule(OverlapRule::Free)),
+            OverlapText::Word(w) if w == "constant" => Ok(Overlap::Rule(OverlapRule::Constant)),
+            OverlapText::Number(mm) => Ok(Overlap::Length(mm)),
+            OverlapText::Word(w) => Err(format!(
+                "overlap = \"{w}\": expected \"free\", \"constant\" or a hub lap in mm"
+            )),
+        }
+    }
+}
+
+/// How the hub laps may vary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OverlapRule {
+    /// Any length above the weld minimum.
+    Free,
+    /// One length for every link, chosen by the build.
+    Constant,
+}
+
+impl FrameConfig {
+    /// The one hub lap every link must have (mm), if any: `laps` are the primary solve's.
+    /// Errors when a length below the weld minimum or not a length is asked for.
+    pub fn overlap_target(&self, laps: &[f64], min_overlap: f64) -> Result<Option<f64>> {
+        match self.overlap {
+            Overlap::Rule(OverlapRule::Free) => Ok(None),
+            Overlap::Rule(OverlapRule::Constant) => {
+                let mut sorted: Vec<f64> = laps.iter().copied().filter(|v| v.is_finite()).collect();
+                sorted.sort_by(f64::total_cmp);
+                let median = sorted.get(sorted.len() / 2).copied().unwrap_or(min_overlap);
+                Ok(Some(median.max(min_overlap + 1.0)))
+            }
+            Overlap::Length(mm) if mm.is_finite() && mm >= min_overlap => Ok(Some(mm)),
+            Overlap::Length(mm) => bail!(
+                "frame: parameter overlap = {mm}: a hub lap must be a length of at least the \
+                 weld minimum {min_overlap} mm"
+            ),
+        }
+    }
+}
+
+/// `[joints]`: the joint solve (docs/geometry.md, "Closing the joints").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct JointsConfig {
+    /// Move the hub mesh and every unit's plates together so that the parts as cut meet:
+    /// bridges fold without stretching, plates of neighbouring strips touch where they are
+    /// welded. `false` keeps the hub mesh and the primary solve as they are (the joints
+    /// then stay open: a study option).
+    pub close: bool,
+    /// Largest number of solver iterations.
+    pub max_iterations: usize,
+    /// Close the joints with the strips along both mesh directions and keep the one whose
+    /// joints hold better (`[strips] direction` is tried first); `--strip-direction` on the
+    /// command line tries only the direction it names.
+    pub both_directions: bool,
+}
+
+impl Default for JointsConfig {
+    fn default() -> Self {
+        Self {
+            close: true,
+            max_iterations: sv_frame::JointOptions::default().max_iterations,
+            both_directions: true,
         }
     }
 }

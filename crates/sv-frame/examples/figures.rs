@@ -638,7 +638,10 @@ fn figure_flat_grid() -> (String, Real, Real, Real) {
     let links = mesh.links();
     let deps = vec![Deployment::new(alpha, 0.0); hubs.len()];
     let units = sv_frame::FrameUnits::new(&hubs, 1.0, None).expect("units");
-    let ev = evaluate(&hubs, &links, &deps, &units).expect("evaluate");
+    let poses: Vec<_> = (0..hubs.len())
+        .map(|f| units.pose(f, &hubs[f], &deps[f]).expect("pose"))
+        .collect();
+    let ev = evaluate(&hubs, &links, &poses, &units).expect("evaluate");
     let gap_max = ev.gaps.iter().copied().fold(0.0, Real::max);
     let overlap = ev.overlaps[0];
     // primary corners in world coordinates: R^T (r_i - P) in the hub frame

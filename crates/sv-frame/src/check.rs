@@ -254,8 +254,12 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
                     q.as_ref()?[2],
                     q.as_ref()?[3],
                 ],
-                frame.params.spin_angle,
+                u.spin.unwrap_or(frame.params.spin_angle),
             )
+            .and_then(|mut h| {
+                h.rhombus = h.rhombus.scaled(u.tile_scale.unwrap_or([1.0, 1.0])).ok()?;
+                Some(h)
+            })
         }) {
             Some(h) => fitted.see(
                 (0..4)
@@ -339,6 +343,8 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
         first_missing.map_or("-".into(), |(v, w)| format!("edge ({v}, {w})"))
     });
 
+    let joints = check_joints(frame, &expanded, &slot);
+
     let mut planar = Worst::new(
         "face planarity (diagonal distance / mean edge)",
         options.planarity_tolerance,
@@ -346,10 +352,19 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
     for (f, r) in mesh.planarity_residuals().into_iter().enumerate() {
         planar.see(r, || format!("face {f}"));
     }
-    let mut conical = Worst::new(
-        "conical residual (rad, any valence)",
-        options.conical_tolerance,
-    );
+    // conicality is the paper's stand-in for "the primary tiles can meet"; where the
+    // joints were closed on the plates themselves it is shown, not held
+    let mut conical = if joints.is_empty() {
+        Worst::new(
+            "conical residual (rad, any valence)",
+            options.conical_tolerance,
+        )
+    } else {
+        Worst::new(
+            "conical residual (rad; not held: the joints are closed)",
+            Real::INFINITY,
+        )
+    };
     for (v, r) in mesh.conical_residuals() {
         conical.see(r, || format!("vertex {v}"));
     }
@@ -361,10 +376,62 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
         .into_iter()
         .chain(kinematics)
         .chain(cut.is_none().then_some(params))
-        .chain([fitted, gaps, overlaps, coverage, planar, conical])
+        .chain([fitted, gaps, overlaps, coverage])
+        .chain(joints)
+        .chain([planar, conical])
         .map(Worst::row)
         .collect();
     CheckReport { rows }
+}
+
+/// The rows of the joints recorded in `links[].joint` (none when the file has none): each
+/// remeasured on the file's plates against the record. Whether the joints hold their limits
+/// is the fold check's question, asked of the parts as cut (`sv_strips::fold_check`).
+fn check_joints(
+    frame: &FrameFile,
+    expanded: &[Option<[Point3; 4]>],
+    slot: &dyn Fn(usize, usize, usize) -> Option<usize>,
+) -> Vec<Worst> {
+    if frame.links.iter().all(|l| l.joint.is_none()) {
+        return Vec::new();
+    }
+    let thickness = frame.params.thickness.unwrap_or(0.0);
+    let mut claims = Worst::new("joint records = the plates in the file (mm, rad)", 1e-6);
+    let mut unrecorded = Worst::new("links without a joint record", 0.0);
+    for (li, l) in frame.links.iter().enumerate() {
+        let [a, b] = l.units;
+        let at = || {
+            let id = |u: usize| frame.units.get(u).map_or("?".into(), |r| r.id.clone());
+            format!("link {li} ({} - {})", id(a), id(b))
+        };
+        let Some(j) = l.joint else {
+            unrecorded.see(1.0, at);
+            continue;
+        };
+        let (Some(k), Some(m)) = (slot(a, l.edge[0], l.edge[1]), slot(b, l.edge[0], l.edge[1]))
+        else {
+            claims.see(Real::INFINITY, at);
+            continue;
+        };
+        let (Some(Some(pa)), Some(Some(pb))) = (expanded.get(a), expanded.get(b)) else {
+            claims.see(Real::INFINITY, at);
+            continue;
+        };
+        let r = crate::joint::joint_record(pa, k, pb, m, j.along[0], j.kind, thickness);
+        claims.see(
+            [
+                r.gap - j.gap,
+                r.bend - j.bend,
+                r.twist - j.twist,
+                r.collision - j.collision,
+                r.along[1] - j.along[1],
+            ]
+            .iter()
+            .fold(0.0, |m: Real, v| m.max(v.abs())),
+            at,
+        );
+    }
+    vec![claims, unrecorded]
 }
 
 #[cfg(test)]

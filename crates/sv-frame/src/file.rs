@@ -43,6 +43,83 @@ pub struct FrameParams {
     /// Where the cut goes in every unit (mm); absent for the paper's zero-width unit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cut: Option<sv_unit::CutWidths>,
+    /// Sheet thickness (mm; extra field, with `links[].joint`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thickness: Option<f64>,
+    /// What the joints must reach (extra field, with `links[].joint`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_limits: Option<JointLimits>,
+}
+
+/// What the joints between primary plates must reach, measured on the plates as cut
+/// (`params.joint_limits`; docs/geometry.md, "Closing the joints").
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointLimits {
+    /// Largest distance between the facing sides at a bridge (mm): the bridge's stretch.
+    pub bridge_gap: f64,
+    /// Largest in-plane bend of a bridge (rad).
+    pub bend: f64,
+    /// Largest twist of a bridge (rad).
+    pub twist: f64,
+    /// Largest gap between the plates at a weld (mm, thickness included).
+    pub weld_gap: f64,
+    /// Deepest a plate may reach into another (mm, thickness included).
+    pub collision: f64,
+}
+
+impl JointLimits {
+    /// These limits times `k` (the angles and lengths alike).
+    pub fn within(&self, k: f64) -> Self {
+        Self {
+            bridge_gap: k * self.bridge_gap,
+            bend: k * self.bend,
+            twist: k * self.twist,
+            weld_gap: k * self.weld_gap,
+            collision: k * self.collision,
+        }
+    }
+
+    /// The joint is within these limits.
+    pub fn holds(&self, j: &JointRecord) -> bool {
+        match j.kind {
+            JointKind::Bridge => self.bridge_holds(j),
+            JointKind::Weld => j.gap <= self.weld_gap && j.collision <= self.collision,
+        }
+    }
+
+    /// How far the joint is from its limits: the largest of its figures (for its kind, the
+    /// plates into each other included) as a multiple of its limit; at most 1 when it holds.
+    pub fn excess(&self, j: &JointRecord) -> f64 {
+        let over = |v: f64, limit: f64| v.abs() / limit.max(1e-9);
+        let shape = match j.kind {
+            JointKind::Bridge => over(j.gap, self.bridge_gap)
+                .max(over(j.bend, self.bend))
+                .max(over(j.twist, self.twist)),
+            JointKind::Weld => over(j.gap, self.weld_gap),
+        };
+        shape.max(over(j.collision, self.collision))
+    }
+
+    /// The joint, taken as a bridge, is within these limits.
+    pub fn bridge_holds(&self, j: &JointRecord) -> bool {
+        j.gap <= self.bridge_gap && j.bend.abs() <= self.bend && j.twist.abs() <= self.twist
+    }
+}
+
+impl Default for JointLimits {
+    /// Bridges within 0.5 mm, bent at most 3 degrees in their plane and twisted at most 7
+    /// (a 7.5 x 3.75 mm web of 2.5 mm sheet at 5 % strain, docs/geometry.md); welds within
+    /// 1.5 mm (a butt or fillet weld bridges that in 3 mm sheet without a filler); plates
+    /// into each other by at most 0.1 mm.
+    fn default() -> Self {
+        Self {
+            bridge_gap: 0.5,
+            bend: 3f64.to_radians(),
+            twist: 7f64.to_radians(),
+            weld_gap: 1.5,
+            collision: 0.1,
+        }
+    }
 }
 
 /// `mesh`: vertices (mm) and quad faces.
@@ -86,6 +163,14 @@ pub struct UnitRecord {
     /// The legs' pins in the deployed pose.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pins: Option<LegPins>,
+    /// This unit's spin angle (rad) where it is not `params.spin_angle`: the joint solve
+    /// turns each hub in its face to close the joints (extra field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spin: Option<f64>,
+    /// The tile's half-diagonals as a multiple of the face's best-fit rhombus `[along the
+    /// hub's x, along its y]`, where the joint solve stretched it (extra field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tile_scale: Option<[f64; 2]>,
 }
 
 /// Where the four legs of a unit are pinned, deployed (mm): leg `j` is a rigid bar from
@@ -115,6 +200,42 @@ pub struct LinkRecord {
     /// Side / corner index `k` facing this link in each unit (extra field).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub slots: Option<[usize; 2]>,
+    /// How the two primary plates meet, on frames whose joints were closed (extra field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint: Option<JointRecord>,
+}
+
+/// How the primary plates of a link meet (`links[].joint`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointKind {
+    /// The two units are one piece of steel: a bridge spans the joint slot between their
+    /// plates (consecutive units of a strip) and folds about the joint line.
+    Bridge,
+    /// The plates of two strips, welded on site where they touch.
+    Weld,
+}
+
+/// A joint between two primary plates, measured on the plates as cut (extra field
+/// `links[].joint`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointRecord {
+    /// Bridge or weld.
+    pub kind: JointKind,
+    /// Where the joint is on each unit's facing side (0 at its corner `k`, 1 at `k + 1`):
+    /// the bridge's middle, or the weld point.
+    pub along: [f64; 2],
+    /// Gap between the two plates there (mm): at a bridge between the facing sides (the
+    /// fold line, so 0 when the bridge folds without stretching); at a weld between the
+    /// plates, thickness included (0 when they touch, edge to edge or edge on face).
+    pub gap: f64,
+    /// In-plane bend of the joint (rad): the turn of the second side in the first plate's
+    /// plane.
+    pub bend: f64,
+    /// Twist of the joint (rad): the turn of the second side out of the first plate's plane.
+    pub twist: f64,
+    /// How far one plate reaches into the other (mm, thickness included; 0 when clear).
+    pub collision: f64,
 }
 
 /// Solver figures (extra field `solve`).

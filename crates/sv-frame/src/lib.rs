@@ -19,7 +19,9 @@ mod check;
 mod error;
 mod file;
 mod hub;
+mod joint;
 mod mesh;
+pub mod plates;
 mod solve;
 mod unit;
 
@@ -28,13 +30,14 @@ pub use check::{
 };
 pub use error::{FrameError, MeshError};
 pub use file::{
-    FrameFile, FrameParams, LegPins, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT,
-    FRAME_VERSION,
+    FrameFile, FrameParams, JointKind, JointLimits, JointRecord, LegPins, LinkRecord, MeshData,
+    SolveSummary, UnitRecord, FRAME_FORMAT, FRAME_VERSION,
 };
 pub use hub::{hubs_from_mesh, Hub};
+pub use joint::{close_joints, Anchor, JointFigures, JointOptions, JointReport, Surface};
 pub use mesh::{normal_cone, normal_cone_residual, Link, MeshChecks, QuadMesh};
 pub use solve::{
-    evaluate, solve, Evaluation, GapObjective, Progress, SidePolicy, SolveOptions, SolveReport,
-    Solved, DEFAULT_SPIN_ANGLE, STALL_WINDOW,
+    evaluate, solve, Evaluation, GapObjective, Joints, Progress, SidePolicy, SolveOptions,
+    SolveReport, Solved, DEFAULT_SPIN_ANGLE, STALL_WINDOW,
 };
-pub use unit::FrameUnits;
+pub use unit::{FrameUnits, UnitPose};

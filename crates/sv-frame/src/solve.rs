@@ -23,10 +23,12 @@ use sv_geom::{segment_closest, Point3, Real, Vector3};
 use sv_unit::{AxisCase, CutWidths, Deployment, Side};
 
 use crate::file::{
-    FrameParams, LegPins, LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT,
-    FRAME_VERSION,
+    FrameParams, JointLimits, JointRecord, LegPins, LinkRecord, MeshData, SolveSummary, UnitRecord,
+    FRAME_FORMAT, FRAME_VERSION,
 };
-use crate::{hubs_from_mesh, FrameError, FrameFile, FrameUnits, Hub, Link, MeshChecks, QuadMesh};
+use crate::{
+    hubs_from_mesh, FrameError, FrameFile, FrameUnits, Hub, Link, MeshChecks, QuadMesh, UnitPose,
+};
 
 /// Iterations over which [`SolveOptions::tolerance`] measures progress.
 pub const STALL_WINDOW: usize = 5;
@@ -154,6 +156,17 @@ pub struct Evaluation {
     pub overlaps: Vec<Real>,
 }
 
+/// The joints of a frame whose joints were closed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joints {
+    /// Per link.
+    pub records: Vec<JointRecord>,
+    /// Sheet thickness they were measured with (mm).
+    pub thickness: Real,
+    /// What they were to reach.
+    pub limits: JointLimits,
+}
+
 /// A solved frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Solved {
@@ -161,8 +174,20 @@ pub struct Solved {
     pub hubs: Vec<Hub>,
     /// Interior edges.
     pub links: Vec<Link>,
-    /// One deployment per unit.
+    /// One deployment per unit: the chart point of its pose (for a frame whose joints
+    /// were closed, the chart coordinates of the pose the joint solve reached).
     pub deployments: Vec<Deployment>,
+    /// One pose per unit: where its hub sits on its primary plate.
+    pub poses: Vec<UnitPose>,
+    /// One spin angle per unit (rad): the options' spin angle, or where the joint solve
+    /// turned the hub in its face.
+    pub spins: Vec<Real>,
+    /// One tile scale per unit, `[along the hub's x, along its y]`: 1 unless the joint
+    /// solve stretched the tile's half-diagonals away from the face's best-fit rhombus.
+    pub scales: Vec<[Real; 2]>,
+    /// How the primary plates meet at every link, when the joints were closed
+    /// ([`crate::close_joints`]).
+    pub joints: Option<Joints>,
     /// Gaps and overlaps at the end.
     pub evaluation: Evaluation,
     /// Figures.
@@ -293,7 +318,8 @@ pub fn solve(
             deployments = best.1;
         }
     }
-    let evaluation = evaluate(&hubs, &links, &deployments, &units)?;
+    let poses = problem.poses(&deployments)?;
+    let evaluation = evaluate(&hubs, &links, &poses, &units)?;
     let report = SolveReport {
         gap_sum_start,
         gap_max_start,
@@ -313,6 +339,10 @@ pub fn solve(
         hubs,
         links,
         deployments,
+        poses,
+        spins: vec![options.spin_angle; n],
+        scales: vec![[1.0, 1.0]; n],
+        joints: None,
         evaluation,
         report,
         options: options.clone(),
@@ -483,19 +513,31 @@ impl Problem<'_> {
         }
     }
 
-    /// Every unit's primary corners (on every core; the first unit in order that fails
-    /// names the error, so the result does not depend on the threads).
-    fn corners(&self, deps: &[Deployment]) -> Result<Vec<[Point3; 4]>, FrameError> {
-        let all: Vec<Result<[Point3; 4], FrameError>> = deps
+    /// Every unit's pose (on every core; the first unit in order that fails names the
+    /// error, so the result does not depend on the threads).
+    fn poses(&self, deps: &[Deployment]) -> Result<Vec<UnitPose>, FrameError> {
+        let all: Vec<Result<UnitPose, FrameError>> = deps
             .par_iter()
             .enumerate()
             .map(|(f, d)| {
                 self.units
-                    .primary_world(f, &self.hubs[f], d, self.units.expansion())
+                    .pose(f, &self.hubs[f], d)
                     .map_err(|e| self.unit_error(f, e))
             })
             .collect();
         all.into_iter().collect()
+    }
+
+    fn corners(&self, deps: &[Deployment]) -> Result<Vec<[Point3; 4]>, FrameError> {
+        Ok(self.corners_at(&self.poses(deps)?))
+    }
+
+    fn corners_at(&self, poses: &[UnitPose]) -> Vec<[Point3; 4]> {
+        poses
+            .iter()
+            .zip(self.hubs)
+            .map(|(p, hub)| self.units.primary_world(hub, p, self.units.expansion()))
+            .collect()
     }
 
     /// Gradient and Gauss-Newton blocks at `deps` of an objective `sum_l h_l(r_l)` whose
@@ -604,16 +646,20 @@ fn link_gap(corners: &[[Point3; 4]], l: &Link) -> sv_geom::SegmentClosest {
     )
 }
 
-/// Gaps and hub overlaps of given deployments (one per hub, in face order), measured on
+/// Gaps and hub overlaps of units at `poses` (one per hub, in face order), measured on
 /// the units' plates (as cut when the units are).
 pub fn evaluate(
     hubs: &[Hub],
     links: &[Link],
-    deployments: &[Deployment],
+    poses: &[UnitPose],
     units: &FrameUnits,
 ) -> Result<Evaluation, FrameError> {
     let problem = Problem { hubs, links, units };
-    let gaps = problem.gaps(deployments)?;
+    let corners = problem.corners_at(poses);
+    let gaps = links
+        .iter()
+        .map(|l| link_gap(&corners, l).distance)
+        .collect();
     let overlaps = links
         .iter()
         .map(|l| {
@@ -1006,14 +1052,11 @@ impl Solved {
         let units = self
             .hubs
             .iter()
-            .zip(&self.deployments)
+            .zip(self.deployments.iter().zip(&self.poses))
             .enumerate()
-            .map(|(f, (hub, dep))| {
-                let primary = self
-                    .units
-                    .primary_world(f, hub, dep, 1.0)
-                    .expect("solved deployments are feasible");
-                let depth = self.units.pose(f, hub, dep).map(|(_, p)| p.norm()).ok();
+            .map(|(f, (hub, (dep, pose)))| {
+                let primary = self.units.primary_world(hub, pose, 1.0);
+                let depth = Some(pose.translation.norm());
                 UnitRecord {
                     id: format!("U{f:04}"),
                     face: f,
@@ -1023,18 +1066,20 @@ impl Solved {
                     hub: hub.corners().map(arr),
                     primary: primary.map(arr),
                     hub_plate: Some(self.units.hub_plate(f, hub).map(arr)),
-                    pins: self
-                        .units
-                        .pins_world(f, hub, dep)
-                        .ok()
-                        .map(|(h, r)| LegPins {
+                    pins: {
+                        let (h, r) = self.units.pins_world(f, hub, pose);
+                        Some(LegPins {
                             hub: h.map(arr),
                             rim: r.map(arr),
                             length: self.units.legs(f, hub).length,
-                        }),
+                        })
+                    },
                     axis_case: Some(dep.case),
                     side: Some(dep.side),
                     depth,
+                    spin: ((self.spins[f] - self.options.spin_angle).abs() > 1e-12)
+                        .then_some(self.spins[f]),
+                    tile_scale: (self.scales[f] != [1.0, 1.0]).then_some(self.scales[f]),
                 }
             })
             .collect();
@@ -1048,6 +1093,7 @@ impl Solved {
                 primary_gap: self.evaluation.gaps[i],
                 hub_overlap: self.evaluation.overlaps[i],
                 slots: Some(l.slots),
+                joint: self.joints.as_ref().map(|j| j.records[i]),
             })
             .collect();
         FrameFile {
@@ -1058,6 +1104,8 @@ impl Solved {
                 spin_angle: self.options.spin_angle,
                 expansion: self.options.expansion,
                 cut: self.options.cut,
+                thickness: self.joints.as_ref().map(|j| j.thickness),
+                joint_limits: self.joints.as_ref().map(|j| j.limits),
             },
             mesh: MeshData {
                 vertices: mesh.vertices.iter().map(|p| arr(*p)).collect(),

@@ -2,10 +2,21 @@
 //! [`sv_unit::Linkage`]) or, without cut widths, the paper's zero-width unit (closed form).
 //! The solve, the figures and the frame file all read the units through this one type.
 
-use sv_geom::{Point2, Point3, Real, Vector3};
+use sv_geom::{Matrix3, Point2, Point3, Real, Vector3};
 use sv_unit::{CornerJacobian, CutWidths, Deployment, Linkage, UnitError, UnitLayout};
 
 use crate::{FrameError, Hub};
+
+/// Where a unit's hub sits on its primary plate: hub-frame points `x` at
+/// `rotation x + translation` in the primary plate's (tile) frame, as `s = R r + P` in the
+/// closed form. The translation's length is the frame depth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UnitPose {
+    /// `R`.
+    pub rotation: Matrix3,
+    /// `P` (mm).
+    pub translation: Vector3,
+}
 
 /// The units of a frame, one per hub.
 #[derive(Clone, Debug, PartialEq)]
@@ -68,18 +79,16 @@ impl FrameUnits {
         }
     }
 
-    /// The pose `(R, P)` of unit `f` at `dep` (hub plate's points `x` at `R x + P` in the
-    /// primary plate's frame).
-    pub fn pose(
-        &self,
-        f: usize,
-        hub: &Hub,
-        dep: &Deployment,
-    ) -> Result<(sv_geom::Matrix3, Vector3), UnitError> {
-        match &self.legs {
-            Some(l) => l[f].pose(&hub.rhombus, dep),
-            None => sv_unit::deploy(&hub.rhombus, dep).map(|d| (d.rotation, d.translation)),
-        }
+    /// The pose of unit `f` at the chart point `dep`.
+    pub fn pose(&self, f: usize, hub: &Hub, dep: &Deployment) -> Result<UnitPose, UnitError> {
+        let (rotation, translation) = match &self.legs {
+            Some(l) => l[f].pose(&hub.rhombus, dep)?,
+            None => sv_unit::deploy(&hub.rhombus, dep).map(|d| (d.rotation, d.translation))?,
+        };
+        Ok(UnitPose {
+            rotation,
+            translation,
+        })
     }
 
     /// Primary corners (tile scaled by the expansion) of unit `f` in the hub's frame, with
@@ -96,20 +105,13 @@ impl FrameUnits {
         }
     }
 
-    /// Corners of unit `f`'s tile scaled by `scale` about its centroid, in the world.
-    pub fn primary_world(
-        &self,
-        f: usize,
-        hub: &Hub,
-        dep: &Deployment,
-        scale: Real,
-    ) -> Result<[Point3; 4], UnitError> {
-        let (r, p) = self.pose(f, hub, dep)?;
-        let rt = r.transpose();
-        Ok(hub
-            .rhombus
+    /// Corners of unit `f`'s tile scaled by `scale` about its centroid, in the world, with
+    /// the unit at `pose`.
+    pub fn primary_world(&self, hub: &Hub, pose: &UnitPose, scale: Real) -> [Point3; 4] {
+        let rt = pose.rotation.transpose();
+        hub.rhombus
             .corners()
-            .map(|c| hub.to_world(&Point3::from(rt * (c * scale - p)))))
+            .map(|c| hub.to_world(&Point3::from(rt * (c * scale - pose.translation))))
     }
 
     /// Unit `f`'s hub plate as cut, in the world.
@@ -117,19 +119,14 @@ impl FrameUnits {
         self.hub_plates[f].map(|p| hub.to_world(&p))
     }
 
-    /// Leg `j`'s two pins of unit `f` in the world at `dep`: `(on the hub, on the rim)`.
-    pub fn pins_world(
-        &self,
-        f: usize,
-        hub: &Hub,
-        dep: &Deployment,
-    ) -> Result<([Point3; 4], [Point3; 4]), UnitError> {
+    /// Leg `j`'s two pins of unit `f` in the world at `pose`: `(on the hub, on the rim)`.
+    pub fn pins_world(&self, f: usize, hub: &Hub, pose: &UnitPose) -> ([Point3; 4], [Point3; 4]) {
         let legs = self.legs(f, hub);
-        let (r, p) = self.pose(f, hub, dep)?;
-        let rt = r.transpose();
-        Ok((
+        let rt = pose.rotation.transpose();
+        (
             legs.hub.map(|h| hub.to_world(&Point3::from(h))),
-            legs.rim.map(|y| hub.to_world(&Point3::from(rt * (y - p)))),
-        ))
+            legs.rim
+                .map(|y| hub.to_world(&Point3::from(rt * (y - pose.translation)))),
+        )
     }
 }

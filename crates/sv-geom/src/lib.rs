@@ -19,6 +19,7 @@ mod contour;
 pub mod planar;
 mod rigid;
 mod segment;
+pub mod sparse;
 
 pub use contour::{Contour, Segment, Vertex, BULGE_EPS};
 pub use rigid::rigid_fit;
@@ -38,6 +39,8 @@ pub type Vector2 = nalgebra::Vector2<Real>;
 pub type Matrix3 = nalgebra::Matrix3<Real>;
 /// A unit vector.
 pub type UnitVector3 = nalgebra::Unit<Vector3>;
+/// A rotation matrix with its exponential map (`Rotation3::new(axis_angle)`).
+pub type Rotation3 = nalgebra::Rotation3<Real>;
 /// A rotation as a unit quaternion (written `[x, y, z, w]` in files).
 pub type UnitQuaternion = nalgebra::UnitQuaternion<Real>;
 /// A proper rigid motion.

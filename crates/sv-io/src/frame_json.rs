@@ -469,12 +469,16 @@ pub(crate) mod tests {
             depth: Some(50.0),
             hub_plate: None,
             pins: None,
+            spin: None,
+            tile_scale: None,
         };
         FrameFile {
             format: FRAME_FORMAT.into(),
             version: FRAME_VERSION,
             length_unit: "mm".into(),
             params: FrameParams {
+                thickness: None,
+                joint_limits: None,
                 spin_angle: std::f64::consts::FRAC_PI_4,
                 expansion: 1.0,
                 cut: None,
@@ -497,6 +501,7 @@ pub(crate) mod tests {
                 primary_gap: 0.0,
                 hub_overlap: 1.0 / 3.0,
                 slots: Some([1, 3]),
+                joint: None,
             }],
             solve: None,
         }

@@ -220,15 +220,34 @@ fn summary_section(input: &ReportInput<'_>, s: &Summary) -> String {
     h
 }
 
+/// Per link the gap a person reads: on a frame whose joints were closed the joint's, on the
+/// plates as cut (a bridge's sides from its fold line, a weld's plates apart, thickness
+/// included), else the primary gap of the expanded tiles; and what it is called.
+fn link_gaps(frame: &sv_frame::FrameFile) -> (Vec<f64>, &'static str) {
+    if frame.links.iter().any(|l| l.joint.is_some()) {
+        let gaps = frame
+            .links
+            .iter()
+            .map(|l| l.joint.map_or(l.primary_gap, |j| j.gap))
+            .collect();
+        (gaps, "joint gap")
+    } else {
+        (
+            frame.links.iter().map(|l| l.primary_gap).collect(),
+            "primary gap",
+        )
+    }
+}
+
 /// Frame and hub mesh quality, from the files' own figures.
 fn quality_table(input: &ReportInput<'_>) -> String {
     let links = &input.frame.links;
-    let gaps: Vec<f64> = links.iter().map(|l| l.primary_gap).collect();
+    let (gaps, gap_name) = link_gaps(input.frame);
     let overlaps: Vec<f64> = links.iter().map(|l| l.hub_overlap).collect();
     let mut rows: Vec<(String, String)> = Vec::new();
     if let Some((_, lo, median, hi)) = crate::plot::stats(&gaps) {
         rows.push((
-            "primary gap".into(),
+            gap_name.into(),
             format!(
                 "{} / {} / {} mm (min / median / max), sum {} mm",
                 short(lo),
@@ -322,7 +341,7 @@ fn frame_section(input: &ReportInput<'_>) -> String {
 
 fn plots_section(input: &ReportInput<'_>) -> String {
     let frame = input.frame;
-    let gaps: Vec<f64> = frame.links.iter().map(|l| l.primary_gap).collect();
+    let (gaps, gap_name) = link_gaps(frame);
     let overlaps: Vec<f64> = frame.links.iter().map(|l| l.hub_overlap).collect();
     let mesh = QuadMesh {
         vertices: frame
@@ -362,12 +381,20 @@ fn plots_section(input: &ReportInput<'_>) -> String {
     h.push_str(&figure(
         histogram(&gaps, &Histogram {
             id: "hist-gap",
-            title: "Primary gaps",
-            quantity: "gap between facing expanded primary sides",
+            title: if gap_name == "joint gap" { "Joint gaps" } else { "Primary gaps" },
+            quantity: if gap_name == "joint gap" {
+                "gap at the joint, on the plates as cut"
+            } else {
+                "gap between facing expanded primary sides"
+            },
             unit: "mm",
             items: "links",
         }),
-        "The distance the welder has to bridge between neighbouring primary tiles, per link (frame.json primary_gap).",
+        if gap_name == "joint gap" {
+            "Per link, on the plates as cut: at a bridge how far the facing sides are from its fold line, at a weld the gap the welder closes, thickness included (frame.json links[].joint.gap)."
+        } else {
+            "The distance the welder has to bridge between neighbouring primary tiles, per link (frame.json primary_gap)."
+        },
     ));
     h.push_str(&figure(
         histogram(&overlaps, &Histogram {
@@ -568,18 +595,13 @@ fn view_data(input: &ReportInput<'_>) -> Value {
             })
         })
         .collect();
+    let (gaps, gap_name) = link_gaps(input.frame);
     let links: Vec<Value> = input
         .frame
         .links
         .iter()
-        .map(|l| {
-            json!([
-                l.units[0],
-                l.units[1],
-                finite(l.primary_gap),
-                finite(l.hub_overlap)
-            ])
-        })
+        .zip(&gaps)
+        .map(|(l, &gap)| json!([l.units[0], l.units[1], finite(gap), finite(l.hub_overlap)]))
         .collect();
     json!({
         "units": units,
@@ -588,6 +610,7 @@ fn view_data(input: &ReportInput<'_>) -> Value {
         "expansion": input.frame.params.expansion,
         "background": VIEW_BACKGROUND,
         "colour_map": COLOUR_MAP,
+        "gap_name": gap_name,
     })
 }
 

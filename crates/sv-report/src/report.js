@@ -52,7 +52,7 @@ function range(values) {
 
 const MODES = {
   gap: {
-    title: 'largest primary gap to a neighbour (mm)',
+    title: `largest ${data.gap_name || 'primary gap'} to a neighbour (mm)`,
     values: gapMax,
   },
   overlap: {

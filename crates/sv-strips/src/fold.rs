@@ -5,6 +5,7 @@
 
 use std::collections::HashMap;
 
+use sv_frame::plates::{edge_to_plate, hinge_turn, reach_into};
 use sv_frame::{CheckReport, CheckRow, FrameFile};
 use sv_geom::{planar, rigid_fit, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
 use sv_unit::UnitLayout;
@@ -22,27 +23,36 @@ pub struct FoldLimits {
     pub min_overlap: Real,
     /// Largest difference between a lap measured here and frame.json's `hub_overlap`.
     pub overlap_claim: Real,
-    /// Deepest allowed pass-through of facing primary plates at a link between strips.
+    /// Deepest a plate of one strip may reach into a plate of another (thickness
+    /// included).
     pub collision: Real,
+    /// Largest gap between the plates of two strips at their weld point (thickness
+    /// included).
+    pub weld_gap: Real,
     /// Largest change of a bridge's length from flat to folded.
     pub bridge_span: Real,
     /// Largest in-plane bend of a bridge (degrees).
     pub bridge_bend_deg: Real,
+    /// Largest twist of a bridge (degrees).
+    pub bridge_twist_deg: Real,
 }
 
 impl FoldLimits {
-    /// The defaults for `params`: legs, pins and bridges within 0.5 mm, claims within
-    /// 0.1 mm, collisions none deeper than 0.1 mm, laps of at least the weld minimum
-    /// ([`ProfileParams::min_overlap`]), bridges bent in their plane by at most 3 degrees.
+    /// The defaults for `params`: legs and pins within 0.5 mm, claims within 0.1 mm, laps of
+    /// at least the weld minimum ([`ProfileParams::min_overlap`]), the joints within
+    /// [`ProfileParams::joint_limits`].
     pub fn for_profile(params: &ProfileParams) -> Self {
+        let joints = params.joint_limits();
         Self {
             leg: 0.5,
             pin: 0.5,
             min_overlap: params.min_overlap(),
             overlap_claim: 0.1,
-            collision: 0.1,
-            bridge_span: 0.5,
-            bridge_bend_deg: 3.0,
+            collision: joints.collision,
+            weld_gap: joints.weld_gap,
+            bridge_span: joints.bridge_gap,
+            bridge_bend_deg: joints.bend.to_degrees(),
+            bridge_twist_deg: joints.twist.to_degrees(),
         }
     }
 }
@@ -172,8 +182,9 @@ struct Folded {
     primary: Isometry3,
     /// The hub plate as cut, in the world.
     hub_plate: [Point3; 4],
-    /// The primary plate as cut (the tile inset by half the joint slot), in the world.
-    plate: [Point3; 4],
+    /// The primary tile (the plate as cut reaches its sides where no bridge is), in the
+    /// world.
+    tile: [Point3; 4],
 }
 
 /// Fold-check a build: `strips` cut from `frame`. Rows: necks where frame.json pins them,
@@ -235,9 +246,14 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         limits.overlap_claim,
     );
     let mut collisions = Row::max(
-        "facing primary plates pass through (mm, deepest)",
+        "plates of neighbouring strips reach into each other (mm)",
         limits.collision,
     );
+    let mut welds = Row::max(
+        "weld: plates of neighbouring strips apart (mm)",
+        limits.weld_gap,
+    );
+    let thickness = params.thickness;
     for (li, link) in frame.links.iter().enumerate() {
         let [a, b] = link.units;
         let (Some(fa), Some(fb), Some([k, m])) = (folded.get(&a), folded.get(&b), link.slots)
@@ -252,13 +268,28 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         laps.see(lap, at);
         claims.see((lap - link.hub_overlap).abs(), at);
         if strip_of.get(&a) != strip_of.get(&b) {
-            let depth = pass_through(&fa.plate, k, &fb.plate, m)
-                .max(pass_through(&fb.plate, m, &fa.plate, k));
+            // the plates of two strips meet at their tiles' sides (the plate as cut reaches
+            // the tile's side where no bridge is)
+            let (ta, tb) = (&fa.tile, &fb.tile);
+            let depth = reach_into(ta, &tb[m], &tb[(m + 1) % 4], thickness).max(reach_into(
+                tb,
+                &ta[k],
+                &ta[(k + 1) % 4],
+                thickness,
+            ));
             collisions.see(depth, at);
+            // welded where the frame says, else where the sides come closest
+            let s = link.joint.map_or_else(
+                || segment_closest(&ta[k], &ta[(k + 1) % 4], &tb[m], &tb[(m + 1) % 4]).s,
+                |j| j.along[0],
+            );
+            let w = ta[k] + (ta[(k + 1) % 4] - ta[k]) * s;
+            welds.see(edge_to_plate(ta, &w, tb, thickness).norm(), at);
         }
     }
     let mut span = Row::max("bridge length folded - flat (mm)", limits.bridge_span);
     let mut bend = Row::max("bridge bent in its plane (deg)", limits.bridge_bend_deg);
+    let mut twist = Row::max("bridge twisted (deg)", limits.bridge_twist_deg);
     for strip in &strips.strips {
         for pin in &strip.pins {
             let [a, b] = pin.units;
@@ -285,10 +316,12 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             );
             span.see(s, at);
             bend.see(g, at);
+            let (_, tw) = hinge_turn(&fa.tile, pin.sides[0], &fb.tile, pin.sides[1]);
+            twist.see(tw.abs().to_degrees(), at);
         }
     }
     let rows = [
-        pins, legs, plates, laps, claims, collisions, span, bend, rebuilt,
+        pins, legs, plates, laps, claims, welds, collisions, span, bend, twist, rebuilt,
     ]
     .into_iter()
     .map(Row::row)
@@ -383,38 +416,13 @@ fn fold_unit(
         Folded {
             primary,
             hub_plate: layout.hub.map(|p| hub * lift(&p)),
-            plate: layout.plate.map(|p| primary * lift(&p)),
+            tile: flat.map(|p| primary * lift(&p)),
         },
         Necks {
             pin_offsets,
             leg_errors,
         },
     ))
-}
-
-/// How deep side `m` of plate `b` passes through plate `a` (mm, 0 when it does not): the
-/// distance inside `a`, from `a`'s facing side `k`, where `b`'s side crosses `a`'s plane.
-fn pass_through(a: &[Point3; 4], k: usize, b: &[Point3; 4], m: usize) -> Real {
-    let n = (a[2] - a[0]).cross(&(a[3] - a[1]));
-    if n.norm() < 1e-12 {
-        return 0.0;
-    }
-    let n = n.normalize();
-    let (p, q) = (b[m], b[(m + 1) % 4]);
-    let (dp, dq) = ((p - a[0]).dot(&n), (q - a[0]).dot(&n));
-    if dp * dq > 0.0 || dp == dq {
-        return 0.0;
-    }
-    let x = p + (q - p) * (dp / (dp - dq));
-    // inside the convex plate: on the inner side of every edge
-    let inside = |i: usize| {
-        let (s, t) = (a[i], a[(i + 1) % 4]);
-        n.cross(&(t - s)).normalize().dot(&(x - s))
-    };
-    if (0..4).any(|i| inside(i) < 0.0) {
-        return 0.0;
-    }
-    inside(k)
 }
 
 /// A bridge between consecutive units `a` (owning `tile`, its facing side `k`) and `b`,

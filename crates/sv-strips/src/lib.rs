@@ -50,13 +50,14 @@ pub use face::{hub_face, FaceMark, HubFace};
 pub use file::{FlatTile, PinRecord, StripRecord, StripsFile, StripsParams, STRIPS_FORMAT};
 pub use fold::{fold_check, FoldLimits};
 pub use params::{
-    ProfileParams, SplitRule, StripDirection, StripOptions, DEFAULT_SHEET_LENGTH,
+    ProfileParams, SplitRule, StripDirection, StripOptions, BRIDGE_STRAIN, DEFAULT_SHEET_LENGTH,
     DEFAULT_SHEET_MARGIN, MIN_INSIDE_RADIUS,
 };
 pub use plane::convex_intersection_area;
 pub use profile::{profile_strip, Label, StripProfile};
 pub use strip::{
-    apply_labels, chains, strip_id, unit_labels, unroll, unroll_tiles, FlatStrip, Pin, UnitLabel,
+    apply_labels, bridged_links, chains, strip_id, unit_labels, unroll, unroll_tiles, FlatStrip,
+    Pin, UnitLabel,
 };
 /// The contours of a profile: the workspace's one arc contour (outlines counter-clockwise,
 /// cuts clockwise, so the material is on the left).

@@ -26,6 +26,11 @@ pub enum StripDirection {
     V,
 }
 
+/// The largest strain a bridge may take bending in its plane or twisting (5 %: well
+/// inside mild steel's elongation, where the fold itself, a plastic hinge like a neck, takes
+/// far more).
+pub const BRIDGE_STRAIN: f64 = 0.05;
+
 /// How a chain too long for one sheet is cut into pieces (the piece count is the same
 /// either way: the fewest the sheet length and the overlap guard allow).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -159,6 +164,23 @@ impl ProfileParams {
     /// (AWS D1.1), the default of `[primary] min_overlap`.
     pub fn min_overlap(&self) -> f64 {
         (5.0 * self.thickness).max(25.0)
+    }
+
+    /// What the joints between primary plates must reach with this profile
+    /// (docs/geometry.md, "What a bridge takes"). A bridge is a web `neck_width` wide and
+    /// `neck_length` long across its joint slot, of sheet `t`. It folds about the joint
+    /// freely (a plastic hinge, like a neck), but bending it in its plane strains its edges
+    /// by `(w / 2) bend / l` and twisting it shears its faces by `t twist / l` (von Mises
+    /// `/ sqrt 3`); both are held at [`BRIDGE_STRAIN`]. Bridges within 0.5 mm of their flat
+    /// length, welds within 1.5 mm (a butt or fillet weld bridges that in 3 mm sheet without
+    /// a filler), plates into each other by at most 0.1 mm.
+    pub fn joint_limits(&self) -> sv_frame::JointLimits {
+        let (w, l, t) = (self.neck_width, self.neck_length, self.thickness);
+        sv_frame::JointLimits {
+            bend: 2.0 * BRIDGE_STRAIN * l / w,
+            twist: 3f64.sqrt() * BRIDGE_STRAIN * l / t,
+            ..sv_frame::JointLimits::default()
+        }
     }
 
     /// Smallest diameter of a slot's round end: max(kerf + 0.5 mm, t).

@@ -84,7 +84,7 @@ fn p2a(p: Point2) -> [f64; 2] {
     [p.x, p.y]
 }
 
-use sv_unit::inset;
+use sv_unit::inset_sides;
 
 fn closed(points: &[Point2]) -> Polyline<f64> {
     let mut p = Polyline::with_capacity(points.len(), true);
@@ -292,7 +292,17 @@ pub fn profile_strip(
     let mut face_marks = Vec::new();
     let mut plates = Vec::with_capacity(strip.units.len());
     for (j, (&u, tile)) in strip.units.iter().zip(&strip.tiles).enumerate() {
-        let q = inset(tile, half)
+        // the plate: the tile, less half the joint slot where a bridge joins the next or
+        // the previous unit of the strip; elsewhere it reaches the tile's side, where the
+        // neighbouring strip's plate meets it
+        let mut delta = [0.0; 4];
+        if let Some(p) = strip.pins.get(j) {
+            delta[p.sides[0]] = half;
+        }
+        if let Some(p) = j.checked_sub(1).and_then(|i| strip.pins.get(i)) {
+            delta[p.sides[1]] = half;
+        }
+        let q = inset_sides(tile, delta)
             .ok_or_else(|| unit_error(&strip.id, u, "tile smaller than the joint slot".into()))?;
         let label = labels.get(j).cloned().unwrap_or_default();
         let face = *strip

@@ -355,7 +355,13 @@ fn place_next(
     let (tf, tg) = (&tiles.tiles[f], &tiles.tiles[g]);
     let (a, b) = (tf[k], tf[(k + 1) % 4]);
     let (c, d) = (tg[m], tg[(m + 1) % 4]);
-    let cl = segment_closest(&a, &b, &c, &d);
+    let mut cl = segment_closest(&a, &b, &c, &d);
+    // a frame whose joints were closed says where each bridge is
+    if let (Some(jf), Some(jg)) = (tiles.joints[f][k], tiles.joints[g][m]) {
+        cl.s = jf.along;
+        cl.t = jg.along;
+        cl.distance = ((a + (b - a) * cl.s) - (c + (d - c) * cl.t)).norm();
+    }
     let (fa, fb) = (placed_f[k], placed_f[(k + 1) % 4]);
     let u = (fb - fa).normalize();
     let pin = fa + (fb - fa) * cl.s;
@@ -448,6 +454,27 @@ pub fn unroll(frame: &FrameFile, options: &StripOptions) -> Result<Vec<FlatStrip
     unroll_tiles(&tiles, options)
 }
 
+/// Which links of `frame` the strips would bridge (consecutive units of one strip, one
+/// piece of steel) when unrolled with `options`, per link: the joints the joint solve must
+/// make hinges ([`sv_frame::close_joints`]); the others are welded.
+pub fn bridged_links(frame: &FrameFile, options: &StripOptions) -> Result<Vec<bool>, StripsError> {
+    let strips = unroll(frame, options)?;
+    let index: std::collections::HashMap<(usize, usize), usize> = frame
+        .links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| ((l.units[0].min(l.units[1]), l.units[0].max(l.units[1])), i))
+        .collect();
+    let mut bridged = vec![false; frame.links.len()];
+    for pin in strips.iter().flat_map(|s| &s.pins) {
+        let [a, b] = pin.units;
+        if let Some(&i) = index.get(&(a.min(b), a.max(b))) {
+            bridged[i] = true;
+        }
+    }
+    Ok(bridged)
+}
+
 /// [`unroll`] on already extracted tiles.
 pub fn unroll_tiles(
     tiles: &TileSet,
@@ -490,6 +517,10 @@ fn split_by_rule(
     options: &StripOptions,
 ) -> Result<Vec<Piece>, StripsError> {
     let greedy = split_chain(tiles, chain, options, usize::MAX)?;
+    // where the frame's joints were closed, it decided the pieces (its bridges)
+    if tiles.joints.iter().flatten().any(Option::is_some) {
+        return Ok(greedy);
+    }
     let k = greedy.len();
     let sizes: Vec<usize> = greedy.iter().map(|p| p.units.len()).collect();
     let shortest = sizes.iter().copied().min().unwrap_or(0);
@@ -543,9 +574,12 @@ fn split_chain(
             why: "empty strip piece".into(),
         })?;
         let (placed, pin) = place_next(tiles, f, &last, k, g, m);
-        let fits = piece
-            .overlap(&placed, options.overlap_area_tolerance)
-            .is_none()
+        // a joint the frame welds is where a strip ends
+        let welded = tiles.joints[f][k].is_some_and(|j| !j.bridge);
+        let fits = !welded
+            && piece
+                .overlap(&placed, options.overlap_area_tolerance)
+                .is_none()
             && piece.length_with(&placed) <= options.max_length
             && piece.units.len() < cap;
         if fits {

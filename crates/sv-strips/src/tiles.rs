@@ -16,6 +16,19 @@ pub struct TileSet {
     pub across: Vec<[Option<(usize, usize)>; 4]>,
     /// Per unit: the face of its flat tile the hub comes out of ([`hub_face`]).
     pub hub_faces: Vec<HubFace>,
+    /// Per unit and side: the frame's joint there (`links[].joint`: a bridge or a weld, and
+    /// where along the side), when the frame's joints were closed. Strips then run exactly
+    /// through the bridges, each pinned where the frame put it.
+    pub joints: Vec<[Option<SideJoint>; 4]>,
+}
+
+/// A joint seen from one side of a unit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SideJoint {
+    /// True for a bridge (the two units are one piece).
+    pub bridge: bool,
+    /// Where along this side (0 at corner `k`, 1 at `k + 1`).
+    pub along: f64,
 }
 
 impl TileSet {
@@ -55,6 +68,7 @@ impl TileSet {
         }
         let n = tiles.len();
         let mut across = vec![[None; 4]; n];
+        let mut joints = vec![[None; 4]; n];
         for (li, l) in frame.links.iter().enumerate() {
             let [f, g] = l.units;
             if f >= n || g >= n || f == g {
@@ -91,11 +105,28 @@ impl TileSet {
             }
             across[f][k] = Some((g, m));
             across[g][m] = Some((f, k));
+            if let Some(j) = &l.joint {
+                let bridge = j.kind == sv_frame::JointKind::Bridge;
+                if !j.along.iter().all(|a| a.is_finite()) {
+                    return Err(StripsError::Frame {
+                        why: format!("link {li}: joint.along {:?} is not finite", j.along),
+                    });
+                }
+                joints[f][k] = Some(SideJoint {
+                    bridge,
+                    along: j.along[0].clamp(0.0, 1.0),
+                });
+                joints[g][m] = Some(SideJoint {
+                    bridge,
+                    along: j.along[1].clamp(0.0, 1.0),
+                });
+            }
         }
         Ok(Self {
             tiles,
             across,
             hub_faces,
+            joints,
         })
     }
 

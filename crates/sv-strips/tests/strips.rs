@@ -256,6 +256,7 @@ fn a_strip_that_would_overlap_itself_is_split() {
     };
     let tiles = TileSet {
         hub_faces: vec![HubFace::Back; n],
+        joints: vec![[None; 4]; n],
         tiles: (0..n)
             .map(|i| {
                 [

@@ -37,6 +37,9 @@
 //! | `annulus_roof.obj` | paraboloid z = 900 - x^2 / 12000 - y^2 / 9000 | ellipse 3.2 x 2.6 m around a 1.2 x 0.9 m courtyard |
 //! | `torus_patch.obj` | torus R = 3 m, r = 1.5 m, both curvature signs | two meridians and two parallels |
 //!
+//! The frame's acceptance (docs/geometry.md, "Closing the joints") adds `hypar_square.obj`,
+//! z = (x^2 - y^2) / 12000 over a 3.6 x 3.6 m square along its principal directions.
+//!
 //! Quadrilateral patches are `(s, t) in [-1, 1]^2 -> (x, y, z)` sampled on a 56 x 56 grid
 //! (about 70 mm triangles); other footprints are the same grid mapped radially onto a
 //! star-shaped polygon (its corners kept exactly), the annulus a 20 x 224 ring grid.
@@ -68,6 +71,13 @@ fn hypar(s: f64, t: f64) -> (f64, f64, f64) {
     let gable = 450.0 * (1.0 - s.abs()) * (t + 1.0) / 2.0;
     let y = 1700.0 * t + gable;
     (x, y, x * y / 4000.0)
+}
+
+/// The hypar of the frame's acceptance (issue 14): z = (x^2 - y^2) / 12000 over a square of
+/// 3.6 m whose sides run along its principal directions.
+fn hypar_square(s: f64, t: f64) -> (f64, f64, f64) {
+    let (x, y) = (1800.0 * s, 1800.0 * t);
+    (x, y, (x * x - y * y) / 12000.0)
 }
 
 fn wavy(s: f64, t: f64) -> (f64, f64, f64) {
@@ -374,7 +384,7 @@ fn main() {
         .nth(1)
         .unwrap_or_else(|| "fixtures/targets".into());
     std::fs::create_dir_all(&dir).expect("create output directory");
-    let targets: [(&str, Map); 13] = [
+    let targets: [(&str, Map); 14] = [
         ("dome_lens", dome),
         ("cylinder_wave", cylinder),
         ("hypar_pentagon", hypar),
@@ -388,6 +398,7 @@ fn main() {
         ("skewed_vault", skewed_vault),
         ("twisted_vault", twisted_vault),
         ("torus_patch", torus),
+        ("hypar_square", hypar_square),
     ];
     let files = targets
         .into_iter()

@@ -25,9 +25,9 @@
 use nalgebra::{Matrix2, Matrix5, Vector5};
 use sv_geom::{Real, Vector3};
 
-use crate::sparse::SpdSolver;
 use crate::target::TargetIndex;
 use crate::SurfaceError;
+use sv_geom::sparse::SpdSolver;
 
 /// Weight of the curvature alignment against smoothness (dimensionless: `lambda (dk)^2`
 /// has units 1/mm^2 like the Dirichlet energy density, so the field bends toward the

@@ -35,3 +35,9 @@ pub enum SurfaceError {
     #[error("internal error: {0}")]
     Internal(String),
 }
+
+impl From<sv_geom::sparse::SparseError> for SurfaceError {
+    fn from(e: sv_geom::sparse::SparseError) -> Self {
+        SurfaceError::Internal(e.0)
+    }
+}

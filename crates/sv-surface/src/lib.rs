@@ -23,6 +23,7 @@
 //! assert!(report.planarity_max < 0.01);
 //! ```
 
+mod anchors;
 mod auto_layout;
 mod builtin;
 mod cross_field;
@@ -32,10 +33,10 @@ mod optimise;
 mod options;
 mod param;
 mod report;
-mod sparse;
 mod target;
 mod topology;
 
+pub use anchors::TargetSurface;
 pub use builtin::{builtin_target, BUILTIN_NAMES, DEFAULT_BUILTIN};
 pub use cross_field::{cross_field, CrossField, DEFAULT_ALIGNMENT};
 pub use error::SurfaceError;

@@ -7,10 +7,10 @@
 //! iterate with the place named in the report.
 
 use sv_frame::QuadMesh;
+use sv_geom::sparse::NormalEquations;
 use sv_geom::{quad_diagonal_distance, Point3, Real, Vector3};
 
 use crate::report::{measure, Goals, SecondaryReport};
-use crate::sparse::SpdSolver;
 use crate::target::TargetIndex;
 use crate::topology::Topology;
 use crate::{SecondaryOptions, SurfaceError, TargetMesh};
@@ -42,87 +42,6 @@ const BARRIER_WEIGHT: Real = 3.0;
 const SIDE_BARRIER: (Real, Real) = (1.03, 0.98);
 /// Weight of the face-side barrier.
 const SIDE_WEIGHT: Real = 2.0;
-
-/// Normal equations `(J^T W J + eps I) dx = -J^T W r` assembled row by row in a fixed order.
-/// The first iteration records the pattern; later ones scatter each product straight to
-/// its compressed position (rows with weight 0 are skipped in O(1)).
-struct System {
-    n: usize,
-    first: bool,
-    pattern: Vec<(usize, usize)>,
-    first_values: Vec<Real>,
-    pos: Vec<u32>,
-    cursor: usize,
-    values: Vec<Real>,
-    rhs: Vec<Real>,
-    energy: Real,
-}
-
-impl System {
-    fn new(n: usize) -> Self {
-        Self {
-            n,
-            first: true,
-            pattern: Vec::new(),
-            first_values: Vec::new(),
-            pos: Vec::new(),
-            cursor: 0,
-            values: Vec::new(),
-            rhs: vec![0.0; n],
-            energy: 0.0,
-        }
-    }
-
-    fn reset(&mut self, regulariser: Real) {
-        self.values.iter_mut().for_each(|v| *v = 0.0);
-        self.rhs.iter_mut().for_each(|r| *r = 0.0);
-        self.energy = 0.0;
-        self.cursor = 0;
-        for i in 0..self.n {
-            self.entry(i, i, regulariser);
-        }
-    }
-
-    #[inline]
-    fn entry(&mut self, a: usize, b: usize, v: Real) {
-        if self.first {
-            self.pattern.push((a.min(b), a.max(b)));
-            self.first_values.push(v);
-        } else {
-            self.values[self.pos[self.cursor] as usize] += v;
-            self.cursor += 1;
-        }
-    }
-
-    /// One residual `r` with gradient `vals` over distinct columns `cols`, weight `w`.
-    fn row(&mut self, cols: &[usize], vals: &[Real], r: Real, w: Real) {
-        let m = cols.len();
-        if w == 0.0 && !self.first {
-            self.cursor += m * (m + 1) / 2;
-            return;
-        }
-        let w2 = w * w;
-        self.energy += w2 * r * r;
-        for a in 0..m {
-            self.rhs[cols[a]] -= w2 * vals[a] * r;
-            for b in a..m {
-                self.entry(cols[a], cols[b], w2 * vals[a] * vals[b]);
-            }
-        }
-    }
-
-    /// Analyse the recorded pattern (after the first assembly).
-    fn analyse(&mut self) -> Result<SpdSolver, SurfaceError> {
-        let mut solver = SpdSolver::new(self.n, &self.pattern)?;
-        solver.set_values(&self.first_values);
-        self.pos = solver.positions().to_vec();
-        self.values = solver.values_mut().to_vec();
-        self.first = false;
-        self.pattern = Vec::new();
-        self.first_values = Vec::new();
-        Ok(solver)
-    }
-}
 
 fn push3(cols: &mut Vec<usize>, vals: &mut Vec<Real>, base: usize, v: &Vector3) {
     for k in 0..3 {
@@ -238,8 +157,7 @@ pub(crate) fn optimise_indexed(
         x[cbase + 4 * c + 3] = cosine;
     }
 
-    let mut system = System::new(n);
-    let mut solver: Option<SpdSolver> = None;
+    let mut system = NormalEquations::new(n);
     let mut iterations = 0;
     let mut stopped: Option<String> = None;
     let mut hints: Vec<Option<usize>> = vec![None; nv];
@@ -564,15 +482,7 @@ pub(crate) fn optimise_indexed(
                 system.row(&cols, &vals, r, w);
             }
         }
-        if system.first {
-            solver = Some(system.analyse()?);
-        }
-        let Some(solver) = solver.as_mut() else {
-            return Err(SurfaceError::Internal("solver missing".into()));
-        };
-        solver.values_mut().copy_from_slice(&system.values);
-        dx.copy_from_slice(&system.rhs);
-        if !solver.solve(&mut dx)? {
+        if !system.solve(&mut dx)? {
             return Err(SurfaceError::Internal(format!(
                 "normal equations not positive definite at iteration {it}"
             )));

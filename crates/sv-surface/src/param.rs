@@ -6,9 +6,9 @@ use nalgebra::{Matrix2, Matrix6, Vector6};
 use sv_frame::QuadMesh;
 use sv_geom::{Point3, Real, Vector3};
 
-use crate::sparse::SpdSolver;
 use crate::target::TargetIndex;
 use crate::{SecondaryOptions, SurfaceError, TargetMesh};
+use sv_geom::sparse::SpdSolver;
 
 /// Frame of the target: centre, in-plane directions `d1`, `d2` (aligned with the mean
 /// principal curvature directions when the surface has a clear one).

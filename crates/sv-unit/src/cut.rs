@@ -110,8 +110,15 @@ fn meet(p: Point2, d: Vector2, q: Point2, e: Vector2) -> Option<Point2> {
 /// The counter-clockwise convex quad `q` with every side moved inward by `delta`; `None`
 /// when that turns a side around.
 pub fn inset(q: &[Point2; 4], delta: Real) -> Option<[Point2; 4]> {
+    inset_sides(q, [delta; 4])
+}
+
+/// The counter-clockwise convex quad `q` with side `i` (from corner `i` to `i + 1`) moved
+/// inward by `delta[i]`; `None` when that turns a side around.
+pub fn inset_sides(q: &[Point2; 4], delta: [Real; 4]) -> Option<[Point2; 4]> {
     let d: [Vector2; 4] = std::array::from_fn(|i| (q[(i + 1) % 4] - q[i]).normalize());
-    let base: [Point2; 4] = std::array::from_fn(|i| q[i] + Vector2::new(-d[i].y, d[i].x) * delta);
+    let base: [Point2; 4] =
+        std::array::from_fn(|i| q[i] + Vector2::new(-d[i].y, d[i].x) * delta[i]);
     let mut out = [Point2::origin(); 4];
     for i in 0..4 {
         let h = (i + 3) % 4;

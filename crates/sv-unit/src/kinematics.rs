@@ -44,6 +44,11 @@ impl Rhombus {
     pub fn side(&self) -> Real {
         self.a.hypot(self.b)
     }
+
+    /// This rhombus with its half-diagonals scaled by `[along x, along y]`.
+    pub fn scaled(&self, scale: [Real; 2]) -> Result<Self, UnitError> {
+        Self::new(self.a * scale[0], self.b * scale[1])
+    }
 }
 
 /// Which diagonal the rotation axis is orthogonal to (the two cases of the theorem).

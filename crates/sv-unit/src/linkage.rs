@@ -75,6 +75,26 @@ impl Linkage {
         rotation: &Matrix3,
         translation: &Vector3,
     ) -> Result<(Matrix3, Vector3), UnitError> {
+        self.project_within(rotation, translation, Real::INFINITY)
+    }
+
+    /// [`Linkage::project`] for a pose whose legs already nearly hold: no step is longer
+    /// than `reach` times the leg errors, so that where the legs are nearly singular the pose
+    /// settles nearby instead of jumping to another part of the family.
+    pub fn settle(
+        &self,
+        rotation: &Matrix3,
+        translation: &Vector3,
+    ) -> Result<(Matrix3, Vector3), UnitError> {
+        self.project_within(rotation, translation, 4.0)
+    }
+
+    fn project_within(
+        &self,
+        rotation: &Matrix3,
+        translation: &Vector3,
+        reach: Real,
+    ) -> Result<(Matrix3, Vector3), UnitError> {
         let size = self
             .length
             .iter()
@@ -86,12 +106,14 @@ impl Linkage {
                 .iter()
                 .fold(0.0, |a: Real, e| a.max(e.abs()))
         };
-        // the damped step's merit: the sum of squared leg errors
-        let merit =
-            |r: &Matrix3, p: &Vector3| self.leg_errors(r, p).iter().map(|e| e * e).sum::<Real>();
-        // the merit at (r, p), carried from the step that got there
-        let mut now = merit(&r, &p);
-        for _ in 0..60 {
+        // a settling pose creeps where the legs are nearly singular: more, shorter steps,
+        // to a tenth of the tolerance
+        let (iterations, aim) = if reach.is_finite() {
+            (4000, 0.1 * LEG_TOLERANCE)
+        } else {
+            (60, 1e-6 * LEG_TOLERANCE)
+        };
+        for it in 0..iterations {
             let mut c = nalgebra::Vector4::zeros();
             let mut jac = Matrix4x6::zeros();
             for j in 0..4 {
@@ -110,35 +132,49 @@ impl Linkage {
                 }
             }
             let worst = c.amax();
-            if worst <= LEG_TOLERANCE * 1e-6 {
+            if worst <= aim {
                 return Ok((r, p));
             }
             // minimum-norm step, regularised: where the tile is symmetric (phi = 0, the two
             // axis cases meet) one combination of the legs is stationary to first order,
-            // and holds by symmetry
-            let mut jjt = jac * jac.transpose();
-            let mu = 1e-12 * jjt.trace().max(1e-300);
-            for k in 0..4 {
-                jjt[(k, k)] += mu;
-            }
-            let Some(chol) = jjt.cholesky() else {
-                return Err(UnitError::LegsSingular);
+            // and holds by symmetry. The regulariser grows until the step lowers the leg
+            // errors (Levenberg).
+            let merit = |r: &Matrix3, p: &Vector3| {
+                self.leg_errors(r, p).iter().map(|e| e * e).sum::<Real>()
             };
-            let step = -(jac.transpose() * chol.solve(&c));
-            // damped: halve the step until the leg errors fall
-            let mut k = 1.0;
-            loop {
-                let omega = Vector3::new(step[0], step[1], step[2]) * (k / size);
+            let now = merit(&r, &p);
+            let jjt = jac * jac.transpose();
+            let trace = jjt.trace().max(1e-300);
+            let mut mu = 1e-12 * trace;
+            let mut moved = false;
+            while mu < trace {
+                let mut damped = jjt;
+                for k in 0..4 {
+                    damped[(k, k)] += mu;
+                }
+                let Some(chol) = damped.cholesky() else {
+                    mu *= 10.0;
+                    continue;
+                };
+                let mut step = -(jac.transpose() * chol.solve(&c));
+                // a settling pose creeps: its reach doubles every 100 iterations
+                let cap = reach * (1u64 << (it / 100).min(20)) as Real * c.norm() + 1e-12 * size;
+                if step.norm() > cap {
+                    step *= cap / step.norm();
+                }
+                let omega = Vector3::new(step[0], step[1], step[2]) / size;
                 let rn = nalgebra::Rotation3::new(omega).into_inner() * r;
-                let pn = p + Vector3::new(step[3], step[4], step[5]) * k;
-                let next = merit(&rn, &pn);
-                if next < now || k < 1e-3 {
+                let pn = p + Vector3::new(step[3], step[4], step[5]);
+                if merit(&rn, &pn) < now {
                     r = rn;
                     p = pn;
-                    now = next;
+                    moved = true;
                     break;
                 }
-                k /= 2.0;
+                mu *= 10.0;
+            }
+            if !moved {
+                break;
             }
         }
         let err = worst_at(&r, &p);

@@ -1,0 +1,653 @@
+//! The joint solve: the hub mesh and every unit's deployment moved together so that the
+//! parts as cut meet (docs/geometry.md, "Closing the joints").
+//!
+//! Unknowns: every mesh vertex, every unit's primary plate pose, hub spin and two tile
+//! scales (half-diagonals), and where along each link its joint sits. The legs as cut are
+//! stiff residuals during the solve and exact at the end ([`sv_unit::Linkage::settle`]).
+//! Least squares, Levenberg-Marquardt on the sparse normal equations, on these residuals
+//! (mm):
+//! - **bridges** (consecutive units of a strip, one piece of steel): the facing primary
+//!   sides meet (closest points coincide) and run along one line (no bend in the plates'
+//!   plane, twist kept within its limit), so the joint is a fold about that line;
+//! - **welds** (primary plates of neighbouring strips): the facing sides meet at a point,
+//!   and neither plate passes through the other;
+//! - **hub laps** of at least the weld minimum;
+//! - the hub mesh: faces planar, vertices on the target's tangent plane (and boundary line)
+//!   where they started, a light pull back along the surface.
+
+mod problem;
+mod unit;
+
+use rayon::prelude::*;
+use sv_geom::sparse::NormalEquations;
+use sv_geom::{segment_closest, Point3, Real, Rotation3, Vector3};
+use sv_unit::Deployment;
+
+use crate::{
+    evaluate, FrameError, FrameUnits, Hub, JointKind, JointLimits, JointRecord, Joints, QuadMesh,
+    Solved, UnitPose,
+};
+pub(crate) use problem::joint_record;
+use problem::{edge_ratio, Problem};
+use unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints};
+
+/// The target surface the hub mesh stays on.
+pub trait Surface: Sync {
+    /// Where vertex `v`, now at `p`, must stay.
+    fn anchor(&self, v: usize, p: &Point3) -> Anchor;
+}
+
+/// Where a mesh vertex must stay: on the target's tangent plane at `point` (normal
+/// `normal`), and for a boundary vertex on the boundary's tangent line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Anchor {
+    /// The target point nearest the vertex.
+    pub point: Point3,
+    /// The target's unit normal there.
+    pub normal: Vector3,
+    /// For a boundary vertex: the nearest boundary point and the boundary's unit tangent.
+    pub boundary: Option<(Point3, Vector3)>,
+}
+
+/// Options of [`close_joints`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointOptions {
+    /// Largest number of Levenberg-Marquardt iterations.
+    pub max_iterations: usize,
+    /// Largest distance of a vertex from its anchor plane (and line), as a fraction of the
+    /// mean side.
+    pub closeness: Real,
+    /// The weld minimum of the hub laps (mm).
+    pub min_overlap: Real,
+    /// One hub lap for every link (mm), so that one gauge block checks every hub joint on
+    /// site; `None`: any lap above the minimum.
+    pub overlap: Option<Real>,
+    /// What the joints must reach.
+    pub limits: JointLimits,
+    /// Width of a bridge along its joint (mm): turns are weighed as the offset they make at
+    /// its edges.
+    pub bridge_width: Real,
+    /// How far a joint point stays from the ends of both facing sides (mm): room for a
+    /// bridge and its fillets on the plates' straight edges.
+    pub bridge_room: Real,
+    /// Sheet thickness (mm): plates closer than this where they overlap collide.
+    pub thickness: Real,
+}
+
+impl Default for JointOptions {
+    fn default() -> Self {
+        Self {
+            max_iterations: 80,
+            closeness: 0.05,
+            min_overlap: 0.0,
+            overlap: None,
+            limits: JointLimits::default(),
+            bridge_width: 7.5,
+            bridge_room: 15.0,
+            thickness: 2.5,
+        }
+    }
+}
+
+/// The worst figures of a frame's joints.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointFigures {
+    /// Largest distance between the facing sides at a bridge (mm).
+    pub bridge_gap: Real,
+    /// Largest bend of a bridge (rad).
+    pub bridge_bend: Real,
+    /// Largest twist of a bridge (rad).
+    pub bridge_twist: Real,
+    /// Largest distance between the facing sides at a weld (mm).
+    pub weld_gap: Real,
+    /// Deepest pass-through of facing primary plates (mm).
+    pub collision: Real,
+    /// Shortest hub lap (mm).
+    pub lap_min: Real,
+    /// Largest face planarity (diagonal distance / mean side).
+    pub planarity: Real,
+    /// Largest distance of a vertex from its anchor plane (mm).
+    pub closeness: Real,
+}
+
+impl JointFigures {
+    /// These figures with the joints and laps measured again: the joint figures from
+    /// `records`, the shortest lap from `laps`.
+    fn measured(mut self, records: &[JointRecord], laps: &[Real]) -> Self {
+        let (mut bridge, mut weld) = ([0.0 as Real; 3], 0.0 as Real);
+        self.collision = 0.0;
+        for j in records {
+            match j.kind {
+                JointKind::Bridge => {
+                    bridge[0] = bridge[0].max(j.gap);
+                    bridge[1] = bridge[1].max(j.bend.abs());
+                    bridge[2] = bridge[2].max(j.twist.abs());
+                }
+                JointKind::Weld => weld = weld.max(j.gap),
+            }
+            self.collision = self.collision.max(j.collision);
+        }
+        [self.bridge_gap, self.bridge_bend, self.bridge_twist] = bridge;
+        self.weld_gap = weld;
+        self.lap_min = laps.iter().copied().fold(Real::INFINITY, Real::min);
+        self
+    }
+}
+
+/// What [`close_joints`] did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointReport {
+    /// Before.
+    pub start: JointFigures,
+    /// After.
+    pub end: JointFigures,
+    /// Iterations.
+    pub iterations: usize,
+    /// The bridges that could not be made and are welded instead, where the strips are
+    /// split: `(link, the bridge as the solve left it)`.
+    pub splits: Vec<(usize, JointRecord)>,
+}
+
+/// Largest move of a vertex or a chart angle (as an arc at the unit's size) per step, as
+/// a fraction of the unit's side.
+const MAX_STEP: Real = 0.02;
+/// A relative fall of the energy below this in one step counts as a stall.
+const STALL: Real = 1e-6;
+/// The legs' weight factors of the polish at the end, and its iterations per factor.
+const LEG_POLISH: [Real; 2] = [30.0, 1000.0];
+const POLISH_ITERATIONS: usize = 10;
+/// The stages of [`Problem::stiffness`].
+const STIFFNESS: [Real; 4] = [0.0, 0.03, 0.1, 0.3];
+
+fn unit_error(f: usize, e: UnitFailure) -> FrameError {
+    match e {
+        UnitFailure::NoHub => FrameError::Mesh(crate::MeshError::DegenerateFace {
+            face: f,
+            why: "no best-fit rhombus (diagonals parallel or reversed)".into(),
+        }),
+        UnitFailure::Cut(why) => FrameError::Cut { unit: f, why },
+    }
+}
+
+/// Levenberg-Marquardt on `problem` from `x` (plates at `poses`) for at most `budget`
+/// iterations: steps within a trust region of MAX_STEP of the side, the anchors taken again
+/// after every step; where it stalls, the joints outside their limits weigh more and it goes
+/// on. Returns the iterations used and the units at the end.
+fn descend(
+    problem: &mut Problem<'_>,
+    ne: &mut NormalEquations,
+    x: &mut Vec<Real>,
+    poses: &mut Vec<PlatePose>,
+    budget: usize,
+    anchors_at: &(dyn Fn(&[Real]) -> Vec<Anchor> + Sync),
+    progress: &mut dyn FnMut(usize, Real),
+) -> Result<(usize, Vec<UnitPoints>), FrameError> {
+    let nf = problem.faces.len();
+    let moves = 3 * problem.nv + 9 * nf;
+    let scale = problem.model.scale;
+    let mut units = problem
+        .units(x, poses, true)
+        .map_err(|(f, e)| unit_error(f, e))?;
+    let mut energy = problem.energy(x, &units);
+    let mut dx = vec![0.0; x.len()];
+    let mut lambda = 1e-4;
+    let mut iterations = 0;
+    while iterations < budget {
+        iterations += 1;
+        ne.reset(1e-9);
+        problem.visit(x, &units, ne);
+        let mut accepted = None;
+        for _ in 0..40 {
+            if !ne
+                .solve_damped(lambda, &mut dx)
+                .map_err(|e| FrameError::Linear(e.0))?
+            {
+                lambda *= 10.0;
+                continue;
+            }
+            // a trust region in the problem's own sizes: vertices and plates (turns as
+            // arcs at the unit's size) move at most MAX_STEP of the side per step (the joint
+            // points slide freely along their sides: not counted, only clamped)
+            let largest = dx[..moves].iter().fold(0.0, |m: Real, v| m.max(v.abs()));
+            let k = (MAX_STEP * scale / largest.max(1e-300)).min(1.0);
+            let mut trial: Vec<Real> = x.iter().zip(&dx).map(|(a, b)| a + k * b).collect();
+            for &col in &problem.joint_columns {
+                trial[col] = trial[col].clamp(0.0, scale);
+            }
+            if let Ok(u) = problem.units(&trial, poses, false) {
+                let e = problem.energy(&trial, &u);
+                if e < energy {
+                    accepted = Some((trial, e));
+                    break;
+                }
+            }
+            lambda *= 4.0;
+        }
+        let gain = match accepted {
+            Some((next, e)) => {
+                let gain = (energy - e) / energy.max(1e-300);
+                // the plates take their increments; the increments start from zero again
+                *poses = (0..nf).map(|f| problem.pose(&next, f, poses)).collect();
+                *x = next;
+                for f in 0..nf {
+                    let c = problem.pose_column(f);
+                    x[c..c + 6].iter_mut().for_each(|v| *v = 0.0);
+                }
+                // the vertices moved: their anchors follow
+                problem.anchors = anchors_at(x);
+                lambda = (lambda / 3.0).max(1e-9);
+                units = problem
+                    .units(x, poses, true)
+                    .map_err(|(f, e)| unit_error(f, e))?;
+                energy = problem.energy(x, &units);
+                progress(iterations, energy);
+                gain
+            }
+            None => 0.0,
+        };
+        if gain < STALL {
+            // stalled: the joints still outside their limits weigh more, and on
+            if !problem.emphasise(x, &units) {
+                break;
+            }
+            energy = problem.energy(x, &units);
+            lambda = 1e-4;
+        }
+    }
+    Ok((iterations, units))
+}
+
+/// The chart coordinates of a pose: the rotation's angle `theta` and its axis' tilt `phi`
+/// from the tile normal toward the diagonal it is not orthogonal to (the axis case). For
+/// the zero-width unit these are the closed form's own; for the unit as cut, the
+/// rotation's.
+fn chart_of(pose: &UnitPose, side: sv_unit::Side) -> Deployment {
+    let r = Rotation3::from_matrix_unchecked(pose.rotation);
+    let (axis, theta) = r
+        .axis_angle()
+        .map(|(a, t)| (a.into_inner(), t))
+        .unwrap_or((Vector3::z(), 0.0));
+    let (t, theta) = if axis.z < 0.0 {
+        (-axis, -theta)
+    } else {
+        (axis, theta)
+    };
+    let (case, phi) = if t.x.abs() <= t.y.abs() {
+        (sv_unit::AxisCase::OrthogonalToR1, t.y.atan2(t.z))
+    } else {
+        (sv_unit::AxisCase::OrthogonalToR2, t.x.atan2(t.z))
+    };
+    Deployment {
+        theta,
+        phi,
+        case,
+        side,
+    }
+}
+
+/// Close the joints of a solved frame: move the hub mesh `mesh` (whose vertices stay on
+/// `surface`) and every unit's primary plate together, the legs as cut held. `bridges[l]`
+/// says whether link `l` joins two consecutive units of a strip. Returns the new mesh and
+/// frame.
+pub fn close_joints(
+    mesh: &QuadMesh,
+    solved: &Solved,
+    surface: &dyn Surface,
+    bridges: &[bool],
+    options: &JointOptions,
+    progress: &mut dyn FnMut(usize, Real),
+) -> Result<(QuadMesh, Solved, JointReport), FrameError> {
+    let nv = mesh.vertices.len();
+    let nf = solved.hubs.len();
+    if bridges.len() != solved.links.len() {
+        return Err(FrameError::Parameter {
+            name: "bridges",
+            value: bridges.len() as Real,
+            why: "one bridge flag per link",
+        });
+    }
+    let anchors_at = |x: &[Real]| -> Vec<Anchor> {
+        (0..nv)
+            .into_par_iter()
+            .map(|v| surface.anchor(v, &Point3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2])))
+            .collect()
+    };
+    let mut faces_at = vec![0usize; nv];
+    for f in &mesh.faces {
+        for &v in f {
+            faces_at[v] += 1;
+        }
+    }
+    let scale = solved.hubs.iter().map(|h| h.rhombus.side()).sum::<Real>() / nf.max(1) as Real;
+    let links = solved.links.len();
+    let mut problem = Problem {
+        edge_ratios: (0..nf).map(|f| edge_ratio(&mesh.face_points(f))).collect(),
+        emphasis: vec![1.0; links],
+        stiffness: STIFFNESS[0],
+        legs: 1.0,
+        joint_columns: (0..links).map(|l| 3 * nv + 9 * nf + l).collect(),
+        faces: &mesh.faces,
+        links: &solved.links,
+        bridges: bridges.to_vec(),
+        anchors: anchors_at(&{
+            let mut x = vec![0.0; 3 * nv];
+            for (v, p) in mesh.vertices.iter().enumerate() {
+                x[3 * v..3 * v + 3].copy_from_slice(p.coords.as_slice());
+            }
+            x
+        }),
+        corners: faces_at.iter().map(|&c| c == 1).collect(),
+        start: mesh.vertices.clone(),
+        model: Model {
+            spin: solved.options.spin_angle,
+            expansion: solved.options.expansion,
+            cut: solved.options.cut,
+            scale,
+        },
+        options,
+        nv,
+        near: options.closeness * scale,
+    };
+    // each primary plate's pose in the world: tile point r at q r + t
+    let mut poses: Vec<PlatePose> = solved
+        .hubs
+        .iter()
+        .zip(&solved.poses)
+        .map(|(hub, p)| {
+            let q = hub.frame * p.rotation.transpose();
+            PlatePose {
+                q,
+                t: hub.centre.coords - q * p.translation,
+            }
+        })
+        .collect();
+    let n = 3 * nv + 9 * nf + links;
+    let mut x = vec![0.0; n];
+    for (v, p) in mesh.vertices.iter().enumerate() {
+        x[3 * v..3 * v + 3].copy_from_slice(p.coords.as_slice());
+    }
+    let mut units = problem
+        .units(&x, &poses, true)
+        .map_err(|(f, e)| unit_error(f, e))?;
+    // joint points start where the facing sides come closest
+    for (l, &col) in solved.links.iter().zip(&problem.joint_columns) {
+        let [f, g] = l.faces;
+        let [k, m] = l.slots;
+        let (pf, pg) = (units[f].primary(), units[g].primary());
+        let c = segment_closest(&pf[k], &pf[(k + 1) % 4], &pg[m], &pg[(m + 1) % 4]);
+        x[col] = c.s * scale;
+    }
+    let start = problem.figures(&x, &units);
+    let mut iterations = 0;
+    let mut ne = NormalEquations::new(n);
+    let mut demoted = Vec::new();
+    let mut stage = 0;
+    // the iterations of the stages; the rest are the legs' polish
+    let polish = (LEG_POLISH.len() * POLISH_ITERATIONS).min(options.max_iterations / 4);
+    let closing = options.max_iterations - polish;
+    loop {
+        // the first stage (the joints closing) gets 40 % of the iterations, each later one
+        // its share of the rest
+        let left = closing.saturating_sub(iterations);
+        let budget = if stage == 0 {
+            closing * 2 / 5
+        } else {
+            left / (STIFFNESS.len() - stage).max(1)
+        };
+        let (used, u) = descend(
+            &mut problem,
+            &mut ne,
+            &mut x,
+            &mut poses,
+            budget,
+            &anchors_at,
+            &mut |it, e| progress(iterations + it, e),
+        )?;
+        iterations += used;
+        units = u;
+        if stage + 1 < STIFFNESS.len() {
+            stage += 1;
+            problem.stiffness = STIFFNESS[stage];
+            ne = NormalEquations::new(n);
+            continue;
+        }
+        // a bridge that cannot be made is where the strip ends: its joint is welded
+        let failing: Vec<(usize, JointRecord)> = problem
+            .records(&x, &units)
+            .into_iter()
+            .enumerate()
+            .filter(|(li, j)| problem.bridges[*li] && !problem.options.limits.bridge_holds(j))
+            .collect();
+        if failing.is_empty() || iterations >= closing {
+            break;
+        }
+        for (li, j) in failing {
+            problem.bridges[li] = false;
+            demoted.push((li, j));
+        }
+        // the new welds weigh as welds from the start
+        ne = NormalEquations::new(n);
+    }
+    // the legs made stiffer step by step, the rest as it was: where a unit sits near a
+    // singular pose (a nearly symmetric tile) its legs' last micrometre would otherwise
+    // cost a millimetre of plate move in the projection onto them
+    for legs in LEG_POLISH {
+        problem.legs = legs;
+        ne = NormalEquations::new(n);
+        let (used, u) = descend(
+            &mut problem,
+            &mut ne,
+            &mut x,
+            &mut poses,
+            polish / LEG_POLISH.len(),
+            &anchors_at,
+            &mut |it, e| progress(iterations + it, e),
+        )?;
+        iterations += used;
+        units = u;
+    }
+    let end = problem.figures(&x, &units);
+    // the new frame: hubs from the new mesh, each unit's pose on its hub projected onto its
+    // legs as cut exactly
+    let mut out = mesh.clone();
+    for (v, p) in out.vertices.iter_mut().enumerate() {
+        *p = Point3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2]);
+    }
+    let shapes: Vec<Shape> = (0..nf).map(|f| problem.shape(&x, f)).collect();
+    let spins: Vec<Real> = shapes.iter().map(|s| s.spin).collect();
+    let scales: Vec<[Real; 2]> = shapes.iter().map(|s| s.scale).collect();
+    let hubs = (0..nf)
+        .map(|f| {
+            let degenerate = |why: &str| {
+                FrameError::Mesh(crate::MeshError::DegenerateFace {
+                    face: f,
+                    why: why.into(),
+                })
+            };
+            let mut hub = Hub::fit(&out.face_points(f), spins[f]).ok_or_else(|| {
+                degenerate("no best-fit rhombus (diagonals parallel or reversed)")
+            })?;
+            hub.rhombus = hub
+                .rhombus
+                .scaled(scales[f])
+                .map_err(|_| degenerate("tile scaled to nothing"))?;
+            Ok(hub)
+        })
+        .collect::<Result<Vec<Hub>, FrameError>>()?;
+    let units_out = FrameUnits::new(&hubs, solved.options.expansion, solved.options.cut.as_ref())?;
+    let mut unit_poses = Vec::with_capacity(nf);
+    for (f, (hub, plate)) in hubs.iter().zip(&poses).enumerate() {
+        let rotation = plate.q.transpose() * hub.frame;
+        let translation = plate.q.transpose() * (hub.centre.coords - plate.t);
+        let (rotation, translation) = units_out
+            .legs(f, hub)
+            .settle(&rotation, &translation)
+            .map_err(|cause| FrameError::Unit {
+                unit: f,
+                face: f,
+                cause,
+            })?;
+        unit_poses.push(UnitPose {
+            rotation,
+            translation,
+        });
+    }
+    // the joints, measured on the plates as they are now
+    let corners: Vec<[Point3; 4]> = hubs
+        .iter()
+        .zip(&unit_poses)
+        .map(|(hub, p)| units_out.primary_world(hub, p, solved.options.expansion))
+        .collect();
+    let joints: Vec<JointRecord> = solved
+        .links
+        .iter()
+        .enumerate()
+        .map(|(li, l)| problem.record(li, &corners[l.faces[0]], &corners[l.faces[1]], &x))
+        .collect();
+    let deployments: Vec<Deployment> = unit_poses
+        .iter()
+        .zip(&solved.deployments)
+        .map(|(p, d)| chart_of(p, d.side))
+        .collect();
+    let evaluation = evaluate(&hubs, &solved.links, &unit_poses, &units_out)?;
+    // the joints as they are on the plates as cut, after the projection onto the legs
+    let end = end.measured(&joints, &evaluation.overlaps);
+    let mut report = solved.report.clone();
+    report.gap_sum = evaluation.gaps.iter().sum();
+    report.gap_max = evaluation.gaps.iter().copied().fold(0.0, Real::max);
+    let frame = Solved {
+        hubs,
+        links: solved.links.clone(),
+        deployments,
+        poses: unit_poses,
+        spins,
+        scales,
+        joints: Some(Joints {
+            records: joints,
+            thickness: options.thickness,
+            limits: options.limits,
+        }),
+        evaluation,
+        report,
+        options: solved.options.clone(),
+        units: units_out,
+    };
+    Ok((
+        out,
+        frame,
+        JointReport {
+            start,
+            end,
+            iterations,
+            splits: demoted,
+        },
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{solve, SolveOptions};
+
+    /// A solved 4 x 4 sphere cap as cut, its anchors (the start) and bridges along rows.
+    fn cap() -> (QuadMesh, Solved, Vec<Anchor>, Vec<bool>) {
+        let mesh = QuadMesh::sphere_cap(4, 4, 3000.0, 300.0);
+        let opts = SolveOptions {
+            cut: Some(sv_unit::CutWidths::STEEL_3MM),
+            ..Default::default()
+        };
+        let solved = solve(&mesh, &opts, &mut |_| {}).unwrap();
+        let c = Point3::new(0.0, 0.0, -3000.0);
+        let anchors = mesh
+            .vertices
+            .iter()
+            .map(|p| Anchor {
+                point: *p,
+                normal: (p - c).normalize(),
+                boundary: None,
+            })
+            .collect();
+        let bridges = solved.links.iter().map(|l| l.slots[0] % 2 == 0).collect();
+        (mesh, solved, anchors, bridges)
+    }
+
+    #[test]
+    fn the_assembled_gradient_is_the_energy_gradient() {
+        let (mesh, solved, anchors, bridges) = cap();
+        let options = JointOptions {
+            min_overlap: 200.0, // every lap short: the lap rows act
+            ..Default::default()
+        };
+        let scale = 300.0;
+        let nv = mesh.vertices.len();
+        let nf = solved.hubs.len();
+        let problem = Problem {
+            faces: &mesh.faces,
+            links: &solved.links,
+            bridges: bridges.clone(),
+            anchors: anchors.clone(),
+            corners: vec![false; nv],
+            start: mesh
+                .vertices
+                .iter()
+                .map(|p| p + Vector3::new(3.0, -2.0, 1.0))
+                .collect(),
+            model: Model {
+                spin: solved.options.spin_angle,
+                expansion: 1.0,
+                cut: solved.options.cut,
+                scale,
+            },
+            options: &options,
+            nv,
+            near: 15.0,
+            joint_columns: (0..solved.links.len())
+                .map(|l| 3 * nv + 9 * nf + l)
+                .collect(),
+            edge_ratios: vec![1.0; nf],
+            emphasis: vec![1.0; solved.links.len()],
+            stiffness: 1.0,
+            legs: 1.0,
+        };
+        let poses: Vec<PlatePose> = solved
+            .hubs
+            .iter()
+            .zip(&solved.poses)
+            .map(|(hub, p)| {
+                let q = hub.frame * p.rotation.transpose();
+                PlatePose {
+                    q,
+                    t: hub.centre.coords - q * p.translation,
+                }
+            })
+            .collect();
+        let mut x = vec![0.0; 3 * nv + 9 * nf + solved.links.len()];
+        for (v, p) in mesh.vertices.iter().enumerate() {
+            x[3 * v..3 * v + 3].copy_from_slice(p.coords.as_slice());
+        }
+        for c in &problem.joint_columns {
+            x[*c] = 0.4 * scale;
+        }
+        let units = problem.units(&x, &poses, true).unwrap();
+        let mut ne = NormalEquations::new(x.len());
+        ne.reset(0.0);
+        problem.visit(&x, &units, &mut ne);
+        let grad: Vec<Real> = ne.rhs.iter().map(|r| -2.0 * r).collect();
+        let energy = |x: &[Real]| problem.energy(x, &problem.units(x, &poses, false).unwrap());
+        // directional derivatives along a few fixed directions
+        for seed in 0..4u64 {
+            let dir: Vec<Real> = (0..x.len())
+                .map(|i| (((i as u64 + 1) * (seed + 7) * 2654435761) % 1000) as Real / 500.0 - 1.0)
+                .collect();
+            let h = 1e-4;
+            let plus: Vec<Real> = x.iter().zip(&dir).map(|(a, d)| a + h * d).collect();
+            let minus: Vec<Real> = x.iter().zip(&dir).map(|(a, d)| a - h * d).collect();
+            let fd = (energy(&plus) - energy(&minus)) / (2.0 * h);
+            let an: Real = grad.iter().zip(&dir).map(|(g, d)| g * d).sum();
+            assert!(
+                (fd - an).abs() <= 1e-4 * fd.abs().max(an.abs()).max(1.0),
+                "direction {seed}: finite difference {fd} vs assembled {an}"
+            );
+        }
+    }
+}

@@ -1,0 +1,742 @@
+//! The joint solve's least-squares problem: its unknowns laid out in one vector, its
+//! residual rows (weights per mm of residual) and their gradients, assembled into the
+//! normal equations or summed into an energy ([`Sink`]).
+
+use rayon::prelude::*;
+use sv_geom::sparse::NormalEquations;
+use sv_geom::{segment_closest, Point3, Real, Vector3};
+
+use super::unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints, INPUTS};
+use super::{Anchor, JointFigures, JointOptions};
+use crate::plates::{edge_to_plate, hinge_turn, reach_into, reach_profile, REACH_SAMPLES};
+use crate::solve::hub_overlap;
+use crate::GOAL_PLANARITY;
+use crate::{JointKind, JointRecord, Link};
+
+/// Residual weights (per mm of residual).
+pub(super) const W_BRIDGE: Real = 10.0;
+pub(super) const W_WELD: Real = 3.0;
+pub(super) const W_PLANAR: Real = 10.0;
+pub(super) const W_CLOSE: Real = 0.3;
+pub(super) const W_DRIFT: Real = 0.03;
+pub(super) const W_LAP: Real = 10.0;
+pub(super) const W_TURN: Real = 0.1;
+pub(super) const W_LEG: Real = 1000.0;
+pub(super) const W_COLLIDE: Real = 100.0;
+pub(super) const W_SCALE: Real = 0.3;
+pub(super) const W_LIMIT: Real = 100.0;
+/// A one-sided limit starts pushing at this fraction of it.
+pub(super) const MARGIN: Real = 0.8;
+/// The largest factor on a joint's weight.
+pub(super) const EMPHASIS_MAX: Real = 100.0;
+/// Faces may grow more unequal than they start only up to this edge ratio (the hub mesh
+/// goal is 1.25 on 95 % of faces).
+pub(super) const EDGE_RATIO: Real = 1.2;
+/// Hub laps are pushed up to this much above the weld minimum (mm).
+pub(super) const LAP_MARGIN: Real = 1.0;
+
+/// 1 where a one-sided residual acts, else 0 (its row stays, with weight 0, so that every
+/// assembly has the same pattern).
+pub(super) fn on(r: Real) -> Real {
+    if r != 0.0 {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// A row of the least-squares problem: residual `r`, weight `w`, gradient over `cols`.
+pub(super) trait Sink {
+    /// The rows that follow are of kind `c` (for a breakdown of the energy).
+    fn kind(&mut self, _c: usize) {}
+    fn gradient(&self) -> bool;
+    fn row(&mut self, cols: &[usize], vals: &[Real], r: Real, w: Real);
+    /// Rows over the same columns.
+    fn block(&mut self, cols: &[usize], rows: &[(&[Real], Real, Real)]) {
+        for &(v, r, w) in rows {
+            self.row(cols, v, r, w);
+        }
+    }
+}
+
+impl Sink for NormalEquations {
+    fn gradient(&self) -> bool {
+        true
+    }
+    fn row(&mut self, cols: &[usize], vals: &[Real], r: Real, w: Real) {
+        NormalEquations::row(self, cols, vals, r, w)
+    }
+    fn block(&mut self, cols: &[usize], rows: &[(&[Real], Real, Real)]) {
+        NormalEquations::block(self, cols, rows)
+    }
+}
+
+/// The energy `sum w^2 r^2` only, and its share per kind of row.
+#[derive(Default)]
+pub(super) struct Energy {
+    total: Real,
+    kinds: [Real; KINDS],
+    kind: usize,
+}
+
+/// Kinds of rows: planarity, anchors, laps, bridge points, weld points, bridge turns,
+/// collisions, legs.
+pub(super) const KINDS: usize = 8;
+
+impl Sink for Energy {
+    fn kind(&mut self, c: usize) {
+        self.kind = c;
+    }
+    fn gradient(&self) -> bool {
+        false
+    }
+    fn row(&mut self, _: &[usize], _: &[Real], r: Real, w: Real) {
+        self.total += w * w * r * r;
+        self.kinds[self.kind] += w * w * r * r;
+    }
+}
+
+/// Rows of a link's primary plates: the joint point's offset (3), its room on both sides
+/// (2), bend, twist, turn beyond the limits, and at a weld the reach of each side into the
+/// other plate at every sample.
+pub(super) const ROWS: usize = 8 + 2 * REACH_SAMPLES;
+
+/// One link's rows over its columns (both units' inputs and its joint parameter), with
+/// their gradients along those columns.
+pub(super) struct LinkBlock {
+    cols: Vec<usize>,
+    rows: Vec<LinkRow>,
+    vals: Vec<Vec<Real>>,
+}
+
+/// One residual of a link: its value, weight, gradient along the units' points and along
+/// the joint's parameter.
+pub(super) struct LinkRow {
+    kind: usize,
+    r: Real,
+    w: Real,
+    /// Which 8 points the gradient is along: the primary plates' corners (`false`, the link's
+    /// first unit's then its second's) or their hub plates' (`true`).
+    hub_plates: bool,
+    /// The gradient along each of those points.
+    grads: [Vector3; 8],
+    ds: Real,
+}
+
+/// Central-difference Jacobian of `f` (`R` values) over `K` points (mm), step `h`:
+/// `out[r][p]` is the gradient of value `r` along point `p`.
+pub(super) fn fd_jac<const K: usize, const R: usize>(
+    pts: &[Point3; K],
+    h: Real,
+    f: impl Fn(&[Point3; K]) -> [Real; R],
+) -> [[Vector3; K]; R] {
+    let mut out = [[Vector3::zeros(); K]; R];
+    for p in 0..K {
+        for c in 0..3 {
+            let mut a = *pts;
+            let mut b = *pts;
+            a[p][c] += h;
+            b[p][c] -= h;
+            let (fa, fb) = (f(&a), f(&b));
+            for r in 0..R {
+                out[r][p][c] = (fa[r] - fb[r]) / (2.0 * h);
+            }
+        }
+    }
+    out
+}
+
+/// The joint problem at one point.
+pub(super) struct Problem<'a> {
+    pub(super) faces: &'a [[usize; 4]],
+    pub(super) links: &'a [Link],
+    pub(super) bridges: Vec<bool>,
+    pub(super) anchors: Vec<Anchor>,
+    /// Per vertex: a corner of the mesh (one face), held where it starts.
+    pub(super) corners: Vec<bool>,
+    pub(super) start: Vec<Point3>,
+    pub(super) model: Model,
+    pub(super) options: &'a JointOptions,
+    pub(super) nv: usize,
+    /// Largest closeness (mm).
+    pub(super) near: Real,
+    /// Per link: the column of its joint point's parameter along the first unit's side.
+    pub(super) joint_columns: Vec<usize>,
+    /// Per face: its edge ratio (longest / shortest) at the start.
+    pub(super) edge_ratios: Vec<Real>,
+    /// Per link: the weight of its joint, raised where the joint stays outside its limits.
+    pub(super) emphasis: Vec<Real>,
+    /// How far the welds' no-collision and side-by-side rows weigh (0 to 1): they come in
+    /// gradually, once the joints have closed, so that they do not lock the start.
+    pub(super) stiffness: Real,
+    /// A factor on the legs' weight: raised at the end, so that the legs hold to far below
+    /// a micrometre with the joints where the solve put them.
+    pub(super) legs: Real,
+}
+
+/// One gradient row under construction: columns merged.
+#[derive(Default)]
+pub(super) struct Row {
+    cols: Vec<usize>,
+    vals: Vec<Real>,
+}
+
+impl Row {
+    pub(super) fn clear(&mut self) {
+        self.cols.clear();
+        self.vals.clear();
+    }
+    pub(super) fn add(&mut self, col: usize, v: Real) {
+        match self.cols.iter().position(|&c| c == col) {
+            Some(i) => self.vals[i] += v,
+            None => {
+                self.cols.push(col);
+                self.vals.push(v);
+            }
+        }
+    }
+    pub(super) fn vertex(&mut self, v: usize, g: &Vector3) {
+        for c in 0..3 {
+            self.add(3 * v + c, g[c]);
+        }
+    }
+}
+
+impl Problem<'_> {
+    pub(super) fn quad(&self, x: &[Real], f: usize) -> [Point3; 4] {
+        self.faces[f].map(|v| Point3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2]))
+    }
+
+    /// Unit `f`'s plate pose moved by its increments in `x`.
+    pub(super) fn pose(&self, x: &[Real], f: usize, poses: &[PlatePose]) -> PlatePose {
+        let i = self.pose_column(f);
+        let w = Vector3::new(x[i], x[i + 1], x[i + 2]) / self.model.scale;
+        poses[f].moved(&w, &Vector3::new(x[i + 3], x[i + 4], x[i + 5]))
+    }
+
+    pub(super) fn pose_column(&self, f: usize) -> usize {
+        3 * self.nv + 9 * f
+    }
+
+    /// Unit `f`'s spin and tile scales: the model's plus their changes in `x`.
+    pub(super) fn shape(&self, x: &[Real], f: usize) -> Shape {
+        let c = self.pose_column(f);
+        let k = self.model.scale;
+        Shape {
+            spin: self.model.spin + x[c + 6] / k,
+            scale: [1.0 + x[c + 7] / k, 1.0 + x[c + 8] / k],
+        }
+    }
+
+    pub(super) fn units(
+        &self,
+        x: &[Real],
+        poses: &[PlatePose],
+        jacobian: bool,
+    ) -> Result<Vec<UnitPoints>, (usize, UnitFailure)> {
+        (0..self.faces.len())
+            .into_par_iter()
+            .map(|f| {
+                let q = self.quad(x, f);
+                let p = self.pose(x, f, poses);
+                let shape = self.shape(x, f);
+                if jacobian {
+                    self.model.jacobian(&q, &p, shape)
+                } else {
+                    self.model.points(&q, &p, shape)
+                }
+                .map_err(|e| (f, e))
+            })
+            .collect()
+    }
+
+    pub(super) fn column(&self, f: usize, i: usize) -> usize {
+        if i < 12 {
+            3 * self.faces[f][i / 3] + i % 3
+        } else {
+            self.pose_column(f) + i - 12
+        }
+    }
+
+    /// Every residual at `x` into `sink`.
+    pub(super) fn visit(&self, x: &[Real], units: &[UnitPoints], sink: &mut dyn Sink) {
+        let grad = sink.gradient();
+        let scale = self.model.scale;
+        let h = 1e-4;
+        let mut row = Row::default();
+        // the faces: planar (held below MARGIN of the goal), edges no more unequal than
+        // they started or EDGE_RATIO
+        sink.kind(0);
+        for f in 0..self.faces.len() {
+            let q = self.quad(x, f);
+            let goal = MARGIN * GOAL_PLANARITY;
+            let ratio = self.edge_ratios[f].max(EDGE_RATIO);
+            let face = |q: &[Point3; 4]| -> [Real; 3] {
+                let m = (q[2] - q[0]).cross(&(q[3] - q[1]));
+                let planar = (q[1] - q[0]).dot(&m) / m.norm().max(1e-300);
+                let e = [0, 1, 2, 3].map(|k| (q[(k + 1) % 4] - q[k]).norm());
+                let (lo, hi) = e.iter().fold((Real::INFINITY, 0.0 as Real), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+                let mean = (e[0] + e[1] + e[2] + e[3]) / 4.0;
+                [
+                    planar,
+                    (planar.abs() - goal * mean).max(0.0),
+                    (hi - ratio * lo).max(0.0),
+                ]
+            };
+            let now = face(&q);
+            let grads = if grad {
+                fd_jac(&q, h, face)
+            } else {
+                [[Vector3::zeros(); 4]; 3]
+            };
+            let weights = [W_PLANAR, W_LIMIT * on(now[1]), W_LIMIT * on(now[2])];
+            for i in 0..3 {
+                row.clear();
+                for k in 0..4 {
+                    row.vertex(self.faces[f][k], &grads[i][k]);
+                }
+                sink.row(&row.cols, &row.vals, now[i], weights[i]);
+            }
+        }
+        // legs as cut
+        sink.kind(7);
+        for (f, u) in units.iter().enumerate() {
+            for j in 0..4 {
+                row.clear();
+                if let Some(dl) = &u.dl {
+                    for i in 0..INPUTS {
+                        row.add(self.column(f, i), dl[j][i]);
+                    }
+                }
+                sink.row(&row.cols, &row.vals, u.legs[j], W_LEG * self.legs);
+            }
+            // the tile's scales: free, but not for nothing
+            let c = self.pose_column(f);
+            for i in 7..9 {
+                sink.row(&[c + i], &[1.0], x[c + i], W_SCALE);
+            }
+        }
+        // vertices on the target
+        sink.kind(1);
+        for (v, a) in self.anchors.iter().enumerate() {
+            let p = Point3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2]);
+            let one = |sink: &mut dyn Sink, row: &mut Row, dir: &Vector3, r: Real, w: Real| {
+                row.clear();
+                if grad {
+                    row.vertex(v, dir);
+                }
+                sink.row(&row.cols, &row.vals, r, w);
+            };
+            let d = (p - a.point).dot(&a.normal);
+            one(sink, &mut row, &a.normal, d, W_CLOSE);
+            let over = (d.abs() - MARGIN * self.near).max(0.0);
+            one(
+                sink,
+                &mut row,
+                &(a.normal * d.signum()),
+                over,
+                W_LIMIT * on(over),
+            );
+            // the pull back along the surface, and the boundary line
+            let drift = p - self.start[v];
+            let (u1, u2) = tangents(&a.normal);
+            if self.corners[v] {
+                // a corner of the mesh stays where it started
+                for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
+                    one(sink, &mut row, &axis, drift.dot(&axis), W_LIMIT);
+                }
+                continue;
+            }
+            match a.boundary {
+                Some((b, t)) => {
+                    // the distance from the boundary line, whichever way the vertex left it
+                    let away = (p - b) - t * t.dot(&(p - b));
+                    let off = away
+                        .try_normalize(1e-12)
+                        .unwrap_or_else(|| t.cross(&a.normal).try_normalize(1e-12).unwrap_or(u1));
+                    let r = away.dot(&off);
+                    one(sink, &mut row, &off, r, W_CLOSE);
+                    let over = (r.abs() - MARGIN * self.near).max(0.0);
+                    one(
+                        sink,
+                        &mut row,
+                        &(off * r.signum()),
+                        over,
+                        W_LIMIT * on(over),
+                    );
+                    one(sink, &mut row, &t, drift.dot(&t), W_DRIFT);
+                }
+                None => {
+                    one(sink, &mut row, &u1, drift.dot(&u1), W_DRIFT);
+                    one(sink, &mut row, &u2, drift.dot(&u2), W_DRIFT);
+                }
+            }
+        }
+        // links: one block each, over both units' inputs and the joint's parameter (built
+        // on every core, assembled in link order)
+        let blocks: Vec<LinkBlock> = self
+            .links
+            .par_iter()
+            .enumerate()
+            .map(|(li, l)| {
+                let [f, g] = l.faces;
+                let col = self.joint_columns[li];
+                let (cols, idx) = self.link_columns(f, g, col);
+                let s = x[col] / scale;
+                let mut rows = self.link_rows(l, self.bridges[li], s, [&units[f], &units[g]], grad);
+                for r in rows.iter_mut().filter(|r| r.kind != 2) {
+                    r.w *= self.emphasis[li];
+                }
+                let vals = rows
+                    .iter()
+                    .map(|r| {
+                        let mut v = vec![0.0; cols.len()];
+                        if grad {
+                            for (q, gv) in r.grads.iter().enumerate() {
+                                let (side, p) = (q / 4, q % 4 + if r.hub_plates { 4 } else { 0 });
+                                if let Some(d) = &units[[f, g][side]].d {
+                                    for i in 0..INPUTS {
+                                        v[idx[side][i]] += gv.dot(&d[p][i]);
+                                    }
+                                }
+                            }
+                            v[cols.len() - 1] += r.ds / scale;
+                        }
+                        v
+                    })
+                    .collect();
+                LinkBlock { cols, rows, vals }
+            })
+            .collect();
+        for LinkBlock { cols, rows, vals } in &blocks {
+            if grad {
+                let block: Vec<(&[Real], Real, Real)> = rows
+                    .iter()
+                    .zip(vals)
+                    .map(|(r, v)| (v.as_slice(), r.r, r.w))
+                    .collect();
+                sink.block(cols, &block);
+            } else {
+                for r in rows {
+                    sink.kind(r.kind);
+                    sink.row(&[], &[], r.r, r.w);
+                }
+            }
+        }
+    }
+
+    /// The columns of a link's block: unit `f`'s inputs, `g`'s that are not `f`'s (they
+    /// share two vertices), the joint's parameter last; and where each unit's inputs went.
+    pub(super) fn link_columns(
+        &self,
+        f: usize,
+        g: usize,
+        joint: usize,
+    ) -> (Vec<usize>, [[usize; INPUTS]; 2]) {
+        let mut cols: Vec<usize> = Vec::with_capacity(2 * INPUTS + 1);
+        let mut idx = [[0; INPUTS]; 2];
+        for (side, u) in [f, g].into_iter().enumerate() {
+            for i in 0..INPUTS {
+                let c = self.column(u, i);
+                idx[side][i] = match cols.iter().position(|&x| x == c) {
+                    Some(p) => p,
+                    None => {
+                        cols.push(c);
+                        cols.len() - 1
+                    }
+                };
+            }
+        }
+        cols.push(joint);
+        (cols, idx)
+    }
+
+    /// The residuals of one link at the joint parameter `s`, with their gradients along the
+    /// units' points (`(0 or 1 for the link's first or second unit, point, gradient)`) and
+    /// along `s`.
+    pub(super) fn link_rows(
+        &self,
+        l: &Link,
+        bridge: bool,
+        s: Real,
+        units: [&UnitPoints; 2],
+        grad: bool,
+    ) -> Vec<LinkRow> {
+        let [k, m] = l.slots;
+        let (k1, m1) = ((k + 1) % 4, (m + 1) % 4);
+        let h = 1e-4;
+        let o = self.options;
+        let mut out = Vec::with_capacity(12);
+        // hub laps: at least the weld minimum, or all of one length
+        if o.min_overlap > 0.0 || o.overlap.is_some() {
+            let pts: [Point3; 8] = std::array::from_fn(|i| units[i / 4].points[4 + i % 4]);
+            let lap = |p: &[Point3; 8]| {
+                let cf = centroid4(&p[0..4]);
+                let cg = centroid4(&p[4..8]);
+                [hub_overlap(&cf, &p[k], &cg, &p[4 + m])]
+            };
+            let now = lap(&pts)[0];
+            let (r, w) = match o.overlap {
+                Some(target) => (target - now, W_LAP),
+                None => {
+                    let short = (o.min_overlap + LAP_MARGIN - now).max(0.0);
+                    (short, W_LAP * on(short))
+                }
+            };
+            let grads = if grad && w > 0.0 {
+                fd_jac(&pts, h, lap)[0]
+            } else {
+                [Vector3::zeros(); 8]
+            };
+            out.push(LinkRow {
+                kind: 2,
+                r,
+                w,
+                hub_plates: true,
+                grads: grads.map(|g| -g),
+                ds: 0.0,
+            });
+        }
+        // the primary plates: the joint at `s` along f's side, inside both sides by the
+        // bridge's room; at a bridge g's side runs through it (the fold line) without
+        // turning in f's plane and twisting within its limit; at a weld the two plates touch
+        // there (edge to edge or edge on face, thickness included), reach nowhere into each
+        // other, and run side by side
+        let pts: [Point3; 8] = std::array::from_fn(|i| units[i / 4].points[i % 4]);
+        let room = if bridge { o.bridge_room } else { 0.0 };
+        let th = o.thickness;
+        let width = o.bridge_width;
+        let (bend_lim, twist_lim) = (MARGIN * o.limits.bend, MARGIN * o.limits.twist);
+        let stiff = self.stiffness > 0.0;
+        let measures = |p: &[Point3; 8], s: Real| -> [Real; ROWS] {
+            let (a, b) = ([p[0], p[1], p[2], p[3]], [p[4], p[5], p[6], p[7]]);
+            let fv = a[k1] - a[k];
+            let w = a[k] + fv * s;
+            let gv = b[m1] - b[m];
+            let len = gv.norm();
+            let gh = gv / len;
+            let t = (w - b[m]).dot(&gh);
+            // g's side passes through the joint point: the fold line of a bridge, the line
+            // the two plates of a weld meet along
+            let off = (w - b[m]) - gh * t;
+            let flen = fv.norm();
+            let out_f = (room - s * flen).max(s * flen - (flen - room)).max(0.0);
+            let out_g = (room - t).max(t - (len - room)).max(0.0);
+            let (bend, twist) = hinge_turn(&a, k, &b, m);
+            let beyond = |v: Real, lim: Real| (v.abs() - lim).max(0.0) * v.signum();
+            let mut r = [0.0; ROWS];
+            r[..8].copy_from_slice(&[
+                off.x,
+                off.y,
+                off.z,
+                out_f,
+                out_g,
+                width * bend,
+                width * if bridge { twist } else { 0.0 },
+                width
+                    * if bridge {
+                        beyond(bend, bend_lim).hypot(beyond(twist, twist_lim))
+                    } else {
+                        0.0
+                    },
+            ]);
+            if !bridge && stiff {
+                r[8..8 + REACH_SAMPLES].copy_from_slice(&reach_profile(&a, &b[m], &b[m1], th));
+                r[8 + REACH_SAMPLES..].copy_from_slice(&reach_profile(&b, &a[k], &a[k1], th));
+            }
+            r
+        };
+        let now = measures(&pts, s);
+        let hs = 1e-6;
+        let (grads, up, down) = if grad {
+            (
+                fd_jac(&pts, h, |p| measures(p, s)),
+                measures(&pts, s + hs),
+                measures(&pts, s - hs),
+            )
+        } else {
+            ([[Vector3::zeros(); 8]; ROWS], now, now)
+        };
+        let (joint, turn) = if bridge { (3, 5) } else { (4, 4) };
+        let weight = if bridge { W_BRIDGE } else { W_WELD };
+        for i in 0..ROWS {
+            let (kind, w) = match i {
+                0..=2 => (joint, weight),
+                3 | 4 => (joint, weight * on(now[i])),
+                5 => (turn, if bridge { W_TURN } else { 0.0 }),
+                6 => (turn, W_TURN),
+                7 => (turn, W_LIMIT * on(now[i])),
+                _ => (6, W_COLLIDE * self.stiffness * on(now[i])),
+            };
+            out.push(LinkRow {
+                kind,
+                r: now[i],
+                w,
+                hub_plates: false,
+                grads: grads[i],
+                ds: (up[i] - down[i]) / (2.0 * hs),
+            });
+        }
+        out
+    }
+
+    /// Every link's joint at `x`.
+    pub(super) fn records(&self, x: &[Real], units: &[UnitPoints]) -> Vec<JointRecord> {
+        (0..self.links.len())
+            .map(|li| {
+                let [f, g] = self.links[li].faces;
+                self.record(li, &units[f].primary(), &units[g].primary(), x)
+            })
+            .collect()
+    }
+
+    /// Link `li`'s joint at its joint point in `x`, its units' primary plates at `a` and `b`.
+    pub(super) fn record(
+        &self,
+        li: usize,
+        a: &[Point3; 4],
+        b: &[Point3; 4],
+        x: &[Real],
+    ) -> JointRecord {
+        let l = &self.links[li];
+        let kind = if self.bridges[li] {
+            JointKind::Bridge
+        } else {
+            JointKind::Weld
+        };
+        let s = x[self.joint_columns[li]] / self.model.scale;
+        joint_record(
+            a,
+            l.slots[0],
+            b,
+            l.slots[1],
+            s,
+            kind,
+            self.options.thickness,
+        )
+    }
+
+    /// Raise the weight of every joint outside its limits (margin included); false when
+    /// none is, or every such joint's weight is at its cap.
+    pub(super) fn emphasise(&mut self, x: &[Real], units: &[UnitPoints]) -> bool {
+        let lim = self.options.limits.within(MARGIN);
+        let mut raised = false;
+        for (li, j) in self.records(x, units).iter().enumerate() {
+            if !lim.holds(j) && self.emphasis[li] < EMPHASIS_MAX {
+                self.emphasis[li] = (self.emphasis[li] * 3.0).min(EMPHASIS_MAX);
+                raised = true;
+            }
+        }
+        raised
+    }
+
+    pub(super) fn energy(&self, x: &[Real], units: &[UnitPoints]) -> Real {
+        self.energies(x, units).total
+    }
+
+    pub(super) fn energies(&self, x: &[Real], units: &[UnitPoints]) -> Energy {
+        let mut e = Energy::default();
+        self.visit(x, units, &mut e);
+        e
+    }
+
+    pub(super) fn figures(&self, x: &[Real], units: &[UnitPoints]) -> JointFigures {
+        let mut fig = JointFigures {
+            lap_min: Real::INFINITY,
+            ..Default::default()
+        };
+        let sides = |f: usize| {
+            let q = self.quad(x, f);
+            (0..4).map(|k| (q[(k + 1) % 4] - q[k]).norm()).sum::<Real>() / 4.0
+        };
+        for f in 0..self.faces.len() {
+            let q = self.quad(x, f);
+            fig.planarity = fig
+                .planarity
+                .max(sv_geom::quad_diagonal_distance(&q) / sides(f));
+        }
+        for (v, a) in self.anchors.iter().enumerate() {
+            let p = Point3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2]);
+            fig.closeness = fig.closeness.max((p - a.point).dot(&a.normal).abs());
+        }
+        for (li, l) in self.links.iter().enumerate() {
+            let [f, g] = l.faces;
+            let [k, m] = l.slots;
+            let (hf, hg) = (units[f].hub_plate(), units[g].hub_plate());
+            fig.lap_min = fig.lap_min.min(hub_overlap(
+                &centroid4(&hf),
+                &hf[k],
+                &centroid4(&hg),
+                &hg[m],
+            ));
+            let j = self.record(li, &units[f].primary(), &units[g].primary(), x);
+            match j.kind {
+                JointKind::Bridge => {
+                    fig.bridge_gap = fig.bridge_gap.max(j.gap);
+                    fig.bridge_bend = fig.bridge_bend.max(j.bend.abs());
+                    fig.bridge_twist = fig.bridge_twist.max(j.twist.abs());
+                }
+                JointKind::Weld => {
+                    fig.weld_gap = fig.weld_gap.max(j.gap);
+                    fig.collision = fig.collision.max(j.collision);
+                }
+            }
+        }
+        fig
+    }
+}
+
+/// The joint at `s` along plate `a`'s side `k`, facing plate `b`'s side `m`, measured.
+pub(crate) fn joint_record(
+    a: &[Point3; 4],
+    k: usize,
+    b: &[Point3; 4],
+    m: usize,
+    s: Real,
+    kind: JointKind,
+    thickness: Real,
+) -> JointRecord {
+    let (k1, m1) = ((k + 1) % 4, (m + 1) % 4);
+    let w = a[k] + (a[k1] - a[k]) * s;
+    let on_b = segment_closest(&w, &w, &b[m], &b[m1]);
+    let (bend, twist) = hinge_turn(a, k, b, m);
+    let (gap, collision) = match kind {
+        JointKind::Bridge => (on_b.distance, 0.0),
+        JointKind::Weld => (
+            edge_to_plate(a, &w, b, thickness).norm(),
+            reach_into(a, &b[m], &b[m1], thickness).max(reach_into(b, &a[k], &a[k1], thickness)),
+        ),
+    };
+    JointRecord {
+        kind,
+        along: [s, on_b.t],
+        gap,
+        bend,
+        twist,
+        collision,
+    }
+}
+
+/// Longest edge / shortest edge of a quad.
+pub(super) fn edge_ratio(q: &[Point3; 4]) -> Real {
+    let e = [0, 1, 2, 3].map(|k| (q[(k + 1) % 4] - q[k]).norm());
+    let lo = e.iter().copied().fold(Real::INFINITY, Real::min);
+    e.iter().copied().fold(0.0, Real::max) / lo.max(1e-300)
+}
+
+pub(super) fn centroid4(p: &[Point3]) -> Point3 {
+    Point3::from(p.iter().fold(Vector3::zeros(), |a, q| a + q.coords) / p.len() as Real)
+}
+
+/// Two unit vectors spanning the plane normal to `n`.
+pub(super) fn tangents(n: &Vector3) -> (Vector3, Vector3) {
+    let helper = if n.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let u1 = n.cross(&helper).normalize();
+    (u1, n.cross(&u1))
+}

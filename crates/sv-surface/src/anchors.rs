@@ -1,0 +1,55 @@
+//! The target as the joint solve sees it (`sv_frame::Surface`): where each hub mesh vertex
+//! must stay, on the target's tangent plane at its nearest target point, and a boundary
+//! vertex also on the boundary's tangent line there. The solve asks again at every step, so
+//! the planes follow the vertices as they move.
+
+use std::collections::HashMap;
+
+use sv_frame::{Anchor, QuadMesh};
+use sv_geom::Point3;
+
+use crate::{SurfaceError, TargetIndex, TargetMesh};
+
+/// A target and which vertices of a hub mesh lie on its boundary.
+pub struct TargetSurface<'a> {
+    index: TargetIndex<'a>,
+    boundary: Vec<bool>,
+}
+
+impl<'a> TargetSurface<'a> {
+    /// The target under the hub mesh `mesh`.
+    pub fn new(target: &'a TargetMesh, mesh: &QuadMesh) -> Result<Self, SurfaceError> {
+        let mut edges: HashMap<(usize, usize), usize> = HashMap::new();
+        for f in &mesh.faces {
+            for k in 0..4 {
+                let (a, b) = (f[k], f[(k + 1) % 4]);
+                *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        let mut boundary = vec![false; mesh.vertices.len()];
+        for (&(a, b), &count) in &edges {
+            if count == 1 {
+                boundary[a] = true;
+                boundary[b] = true;
+            }
+        }
+        Ok(Self {
+            index: TargetIndex::new(target)?,
+            boundary,
+        })
+    }
+}
+
+impl sv_frame::Surface for TargetSurface<'_> {
+    fn anchor(&self, v: usize, p: &Point3) -> Anchor {
+        let c = self.index.closest(p);
+        Anchor {
+            point: c.point,
+            normal: c.normal,
+            boundary: self.boundary.get(v).copied().unwrap_or(false).then(|| {
+                let b = self.index.closest_on_boundary(p);
+                (b.point, b.tangent)
+            }),
+        }
+    }
+}
