@@ -340,15 +340,19 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
                 direction,
                 ..options.strips.clone()
             };
-            let bridges = sv_strips::bridged_links(&frame0, &strip_options)
+            let plan = sv_strips::strip_plan(&frame0, &strip_options)
                 .map_err(|e| anyhow!("{}: strips: {e}", cfg.target))?;
+            let joint_options = sv_frame::JointOptions {
+                pieces: plan.pieces,
+                ..joint_options.clone()
+            };
             let what = format!("joints, strips along {}", direction_name(direction));
             let bar = progress_bar(args.quiet, joint_options.max_iterations, &what);
             let closed = sv_frame::close_joints(
                 &mesh,
                 &solved,
                 &surface,
-                &bridges,
+                &plan.bridges,
                 &joint_options,
                 &mut |it, energy| {
                     bar.set_position(it as u64);
@@ -357,7 +361,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
             );
             finish(&bar);
             let closed = closed.map_err(|e| anyhow!("{}: closing the joints: {e}", cfg.target))?;
-            let score = JointScore::of(&closed.1, &joint_options.limits);
+            let score = JointScore::of(&closed.1, &joint_options.limits, min_overlap);
             if best.as_ref().is_none_or(|(s, _, _)| score.better_than(s)) {
                 best = Some((score, direction, closed));
             }
@@ -567,25 +571,33 @@ fn other_direction(d: sv_strips::StripDirection) -> sv_strips::StripDirection {
     }
 }
 
-/// How well a frame's joints hold: how many are outside their limits, then the worst
+/// How well a frame's joints hold: how many hub laps are below the weld minimum (a build
+/// with any is not written), then how many joints are outside their limits, then the worst
 /// excess as a multiple of its limit.
 #[derive(Clone, Copy, Debug)]
 struct JointScore {
+    short_laps: usize,
     failing: usize,
     worst: f64,
 }
 
 impl JointScore {
-    fn of(solved: &sv_frame::Solved, limits: &sv_frame::JointLimits) -> Self {
+    fn of(solved: &sv_frame::Solved, limits: &sv_frame::JointLimits, min_overlap: f64) -> Self {
         let records = solved.joints.as_ref().map_or(&[][..], |j| &j.records[..]);
         Self {
+            short_laps: solved
+                .evaluation
+                .overlaps
+                .iter()
+                .filter(|&&o| o < min_overlap)
+                .count(),
             failing: records.iter().filter(|j| !limits.holds(j)).count(),
             worst: records.iter().map(|j| limits.excess(j)).fold(0.0, f64::max),
         }
     }
 
     fn better_than(&self, other: &Self) -> bool {
-        (self.failing, self.worst) < (other.failing, other.worst)
+        (self.short_laps, self.failing, self.worst) < (other.short_laps, other.failing, other.worst)
     }
 }
 

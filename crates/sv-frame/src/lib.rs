@@ -34,7 +34,9 @@ pub use file::{
     SolveSummary, UnitRecord, FRAME_FORMAT, FRAME_VERSION,
 };
 pub use hub::{hubs_from_mesh, Hub};
-pub use joint::{close_joints, Anchor, JointFigures, JointOptions, JointReport, Surface};
+pub use joint::{
+    close_joints, Anchor, JointFigures, JointOptions, JointReport, PieceLength, Surface,
+};
 pub use mesh::{normal_cone, normal_cone_residual, Link, MeshChecks, QuadMesh};
 pub use solve::{
     evaluate, solve, Evaluation, GapObjective, Joints, Progress, SidePolicy, SolveOptions,

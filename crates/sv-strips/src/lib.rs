@@ -56,8 +56,8 @@ pub use params::{
 pub use plane::convex_intersection_area;
 pub use profile::{profile_strip, Label, StripProfile};
 pub use strip::{
-    apply_labels, bridged_links, chains, strip_id, unit_labels, unroll, unroll_tiles, FlatStrip,
-    Pin, UnitLabel,
+    apply_labels, chains, strip_id, strip_plan, unit_labels, unroll, unroll_tiles, FlatStrip, Pin,
+    StripPlan, UnitLabel,
 };
 /// The contours of a profile: the workspace's one arc contour (outlines counter-clockwise,
 /// cuts clockwise, so the material is on the left).

@@ -454,25 +454,69 @@ pub fn unroll(frame: &FrameFile, options: &StripOptions) -> Result<Vec<FlatStrip
     unroll_tiles(&tiles, options)
 }
 
-/// Which links of `frame` the strips would bridge (consecutive units of one strip, one
-/// piece of steel) when unrolled with `options`, per link: the joints the joint solve must
-/// make hinges ([`sv_frame::close_joints`]); the others are welded.
-pub fn bridged_links(frame: &FrameFile, options: &StripOptions) -> Result<Vec<bool>, StripsError> {
-    let strips = unroll(frame, options)?;
+/// What the strips stage plans for a frame before its joints close: which links its strips
+/// bridge and how much each piece may grow and still fit its sheet.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StripPlan {
+    /// Per link of the frame: consecutive units of one strip, one piece of steel (a bridge
+    /// the joint solve must make a hinge); the others are welded.
+    pub bridges: Vec<bool>,
+    /// The pieces of more than one unit ([`sv_frame::JointOptions::pieces`]).
+    pub pieces: Vec<sv_frame::PieceLength>,
+}
+
+/// How far short of `max_length` a piece's planned growth stops (mm): the piece's length
+/// along its units stands in for its flat pattern's length in the joint solve.
+const PIECE_LENGTH_MARGIN: f64 = 2.0;
+
+/// How much room to grow a piece is planned with where that takes no more pieces: closing
+/// the joints stretches tiles by up to about 1 %.
+const PLANNED_STRETCH: f64 = 0.015;
+
+/// [`StripPlan`] of `frame` unrolled with `options` ([`sv_frame::close_joints`] reads it).
+/// A chain is cut for a sheet [`PLANNED_STRETCH`] shorter where that takes no more pieces,
+/// so that the joint solve has room to stretch its tiles.
+pub fn strip_plan(frame: &FrameFile, options: &StripOptions) -> Result<StripPlan, StripsError> {
+    options.validate()?;
+    let tiles = TileSet::from_frame(frame)?;
+    let roomy = StripOptions {
+        max_length: options.max_length * (1.0 - PLANNED_STRETCH),
+        ..options.clone()
+    };
+    let mut pieces: Vec<Piece> = Vec::new();
+    for chain in chains(&tiles, options.direction) {
+        let tight = split_by_rule(&tiles, &chain, options)?;
+        match split_by_rule(&tiles, &chain, &roomy) {
+            Ok(p) if p.len() == tight.len() => pieces.extend(p),
+            _ => pieces.extend(tight),
+        }
+    }
+    let strips = named(&tiles, pieces)?;
     let index: std::collections::HashMap<(usize, usize), usize> = frame
         .links
         .iter()
         .enumerate()
         .map(|(i, l)| ((l.units[0].min(l.units[1]), l.units[0].max(l.units[1])), i))
         .collect();
-    let mut bridged = vec![false; frame.links.len()];
-    for pin in strips.iter().flat_map(|s| &s.pins) {
-        let [a, b] = pin.units;
-        if let Some(&i) = index.get(&(a.min(b), a.max(b))) {
-            bridged[i] = true;
+    let mut bridges = vec![false; frame.links.len()];
+    let mut pieces = Vec::new();
+    for strip in &strips {
+        for pin in &strip.pins {
+            let [a, b] = pin.units;
+            if let Some(&i) = index.get(&(a.min(b), a.max(b))) {
+                bridges[i] = true;
+            }
         }
+        if strip.pins.is_empty() {
+            continue;
+        }
+        pieces.push(sv_frame::PieceLength {
+            units: strip.units.clone(),
+            sides: strip.pins.iter().map(|p| p.sides).collect(),
+            room: (options.max_length - PIECE_LENGTH_MARGIN).max(0.0) / strip.size[0],
+        });
     }
-    Ok(bridged)
+    Ok(StripPlan { bridges, pieces })
 }
 
 /// [`unroll`] on already extracted tiles.
@@ -485,6 +529,11 @@ pub fn unroll_tiles(
     for chain in chains(tiles, options.direction) {
         pieces.extend(split_by_rule(tiles, &chain, options)?);
     }
+    named(tiles, pieces)
+}
+
+/// Pieces with their ids (`A01`, `A02`, ... in order), laid straight.
+fn named(tiles: &TileSet, pieces: Vec<Piece>) -> Result<Vec<FlatStrip>, StripsError> {
     pieces
         .into_iter()
         .enumerate()

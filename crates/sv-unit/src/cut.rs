@@ -107,6 +107,18 @@ fn meet(p: Point2, d: Vector2, q: Point2, e: Vector2) -> Option<Point2> {
     Some(p + d * (cross(&(q - p), &e) / den))
 }
 
+/// The point of the open polyline `path` closest to `p`.
+fn closest_on_path(path: &[Point2], p: Point2) -> Point2 {
+    path.windows(2)
+        .map(|w| {
+            let e = w[1] - w[0];
+            let t = ((p - w[0]).dot(&e) / e.norm_squared()).clamp(0.0, 1.0);
+            w[0] + e * t
+        })
+        .min_by(|a, b| (a - p).norm().total_cmp(&(b - p).norm()))
+        .expect("a path has a segment")
+}
+
 /// The counter-clockwise convex quad `q` with every side moved inward by `delta`; `None`
 /// when that turns a side around.
 pub fn inset(q: &[Point2; 4], delta: Real) -> Option<[Point2; 4]> {
@@ -150,14 +162,11 @@ impl UnitLayout {
             return err("tile too small: no hub left inside the legs".into());
         };
         let d: [Vector2; 4] = std::array::from_fn(|i| (q[(i + 1) % 4] - q[i]).normalize());
-        let nrm = |i: usize| Vector2::new(-d[i % 4].y, d[i % 4].x);
         let sin_at = |i: usize| cross(&d[(i + 3) % 4], &d[i % 4]).abs();
         let neck = w.neck + s;
         let mut slot_paths = [[Point2::origin(); 4]; 4];
-        let mut hub_necks = [[Point2::origin(); 2]; 4];
-        let mut rim_necks = [[Point2::origin(); 2]; 4];
         for i in 0..4 {
-            let (i1, i2, prev) = ((i + 1) % 4, (i + 2) % 4, (i + 3) % 4);
+            let (i1, i2) = ((i + 1) % 4, (i + 2) % 4);
             let a = iq[i] + d[i] * (neck / sin_at(i));
             let parallel = || CutError("tile has parallel adjacent sides".into());
             let x = meet(iq[i], d[i], oq[i1], d[i1]).ok_or_else(parallel)?;
@@ -170,16 +179,23 @@ impl UnitLayout {
                     w.neck
                 ));
             }
-            let end = c + d[i2] * run;
-            slot_paths[i] = [a, x, c, end];
-            // leg i joins the hub between the previous slot's edge and this slot's start
-            let foot = iq[i] + d[prev] * (a - iq[i]).dot(&d[prev]) + nrm(prev) * (s / 2.0);
-            hub_necks[i] = [foot, a - d[i] * (s / 2.0)];
-            // leg i1 joins the rim between this slot's end and the next slot's crossing
-            let tip = end + d[i2] * (s / 2.0);
-            let foot = x_next + d[i1] * (end - x_next).dot(&d[i1]) - nrm(i1) * (s / 2.0);
-            rim_necks[i1] = [tip, foot];
+            slot_paths[i] = [a, x, c, c + d[i2] * run];
         }
+        // A slot is its centre line grown by half its width (round ends, round outer
+        // bends), so the web between two slots is narrowest where their centre lines are
+        // closest, and it runs along the line joining those two points. Leg i joins the hub
+        // between the start of slot i and slot i - 1, and the rim (its leg i + 1) between
+        // the end of slot i and slot i + 1.
+        let web = |end: Point2, other: &[Point2; 4]| {
+            let near = closest_on_path(other, end);
+            let u = (near - end).normalize();
+            [end + u * (s / 2.0), near - u * (s / 2.0)]
+        };
+        let hub_necks = std::array::from_fn(|i| web(slot_paths[i][0], &slot_paths[(i + 3) % 4]));
+        let rim_necks = std::array::from_fn(|j| {
+            let i = (j + 3) % 4;
+            web(slot_paths[i][3], &slot_paths[j])
+        });
         Ok(Self {
             plate: q,
             hub,
@@ -268,6 +284,64 @@ mod tests {
             last = worst;
         }
         assert!(last < 0.2, "{last}");
+    }
+
+    /// Points every `step` along the open polyline `path`.
+    fn sampled(path: &[Point2; 4], step: Real) -> Vec<Point2> {
+        path.windows(2)
+            .flat_map(|w| {
+                let n = ((w[1] - w[0]).norm() / step).ceil() as usize;
+                (0..=n).map(move |k| w[0] + (w[1] - w[0]) * (k as Real / n as Real))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn pins_sit_where_the_webs_between_slots_are_narrowest_on_a_skewed_tile() {
+        // a kite with 70 and 110 degree corners: the neck rules of a square tile do not apply
+        let tile = [
+            Point2::new(0.0, 0.0),
+            Point2::new(260.0, 0.0),
+            Point2::new(260.0 + 280.0 * 0.342, 280.0 * 0.940),
+            Point2::new(280.0 * 0.342, 280.0 * 0.940),
+        ];
+        let l = UnitLayout::new(&tile, &DEFAULT).unwrap();
+        let p = l.pins();
+        let samples: Vec<Vec<Point2>> = l.slot_paths.iter().map(|s| sampled(s, 0.01)).collect();
+        // brute force: the closest pair of centre lines of slots `a` and `b` within 15 mm
+        // of `pin`; the web is that distance less a slot width
+        let check = |pin: Point2, a: usize, b: usize| {
+            let near = |v: &Vec<Point2>| -> Vec<Point2> {
+                v.iter()
+                    .copied()
+                    .filter(|q| (q - pin).norm() < 15.0)
+                    .collect()
+            };
+            let (sa, sb) = (near(&samples[a]), near(&samples[b]));
+            let mut best = (Real::INFINITY, Point2::origin());
+            for x in &sa {
+                for y in &sb {
+                    let dist = (x - y).norm();
+                    if dist < best.0 {
+                        best = (dist, Point2::from((x.coords + y.coords) / 2.0));
+                    }
+                }
+            }
+            assert!(
+                (best.1 - pin).norm() < 0.02,
+                "pin {pin} vs web centre {}",
+                best.1
+            );
+            assert!(
+                best.0 - DEFAULT.slot >= DEFAULT.neck - 0.01,
+                "web {}",
+                best.0
+            );
+        };
+        for j in 0..4 {
+            check(p.hub[j], j, (j + 3) % 4);
+            check(p.rim[j], (j + 3) % 4, j);
+        }
     }
 
     #[test]

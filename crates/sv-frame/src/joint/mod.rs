@@ -18,6 +18,8 @@
 mod problem;
 mod unit;
 
+use std::collections::HashMap;
+
 use rayon::prelude::*;
 use sv_geom::sparse::NormalEquations;
 use sv_geom::{segment_closest, Point3, Real, Rotation3, Vector3};
@@ -28,7 +30,7 @@ use crate::{
     Solved, UnitPose,
 };
 pub(crate) use problem::joint_record;
-use problem::{edge_ratio, Problem};
+use problem::{edge_ratio, Join, Piece, Problem};
 use unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints};
 
 /// The target surface the hub mesh stays on.
@@ -72,6 +74,22 @@ pub struct JointOptions {
     pub bridge_room: Real,
     /// Sheet thickness (mm): plates closer than this where they overlap collide.
     pub thickness: Real,
+    /// The strip pieces as the strips stage plans them: none grows longer than its sheet
+    /// lets it.
+    pub pieces: Vec<PieceLength>,
+}
+
+/// A strip piece as the strips stage plans it before the joints close.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PieceLength {
+    /// Its units (faces) in strip order.
+    pub units: Vec<usize>,
+    /// Per join `j`: the facing sides of `units[j]` and `units[j + 1]` (side `k` runs from
+    /// corner `k` to `k + 1` of the primary tile).
+    pub sides: Vec<[usize; 2]>,
+    /// How much longer the piece may grow: the longest flat pattern a sheet takes over the
+    /// piece's flat length at the start.
+    pub room: Real,
 }
 
 impl Default for JointOptions {
@@ -85,6 +103,7 @@ impl Default for JointOptions {
             bridge_width: 7.5,
             bridge_room: 15.0,
             thickness: 2.5,
+            pieces: Vec::new(),
         }
     }
 }
@@ -322,6 +341,7 @@ pub fn close_joints(
     let links = solved.links.len();
     let mut problem = Problem {
         edge_ratios: (0..nf).map(|f| edge_ratio(&mesh.face_points(f))).collect(),
+        pieces: Vec::new(),
         emphasis: vec![1.0; links],
         stiffness: STIFFNESS[0],
         legs: 1.0,
@@ -369,6 +389,21 @@ pub fn close_joints(
     let mut units = problem
         .units(&x, &poses, true)
         .map_err(|(f, e)| unit_error(f, e))?;
+    // the strip pieces the strips stage plans: one unit or more, linked, on real sides
+    if let Some(p) = options.pieces.iter().find(|p| {
+        !p.room.is_finite()
+            || p.room <= 0.0
+            || p.units.is_empty()
+            || p.sides.len() + 1 != p.units.len()
+            || p.units.iter().any(|&f| f >= nf)
+            || p.sides.iter().flatten().any(|&k| k >= 4)
+    }) {
+        return Err(FrameError::Parameter {
+            name: "pieces",
+            value: p.room,
+            why: "a strip piece names a unit or side the frame does not have, or no room",
+        });
+    }
     // joint points start where the facing sides come closest
     for (l, &col) in solved.links.iter().zip(&problem.joint_columns) {
         let [f, g] = l.faces;
@@ -376,6 +411,46 @@ pub fn close_joints(
         let (pf, pg) = (units[f].primary(), units[g].primary());
         let c = segment_closest(&pf[k], &pf[(k + 1) % 4], &pg[m], &pg[(m + 1) % 4]);
         x[col] = c.s * scale;
+    }
+    // each strip piece's flat length may grow as much as its sheet lets it
+    let link_of: HashMap<[usize; 2], usize> = solved
+        .links
+        .iter()
+        .enumerate()
+        .map(|(l, link)| (link.faces, l))
+        .collect();
+    for p in &options.pieces {
+        let joins = p
+            .units
+            .windows(2)
+            .zip(&p.sides)
+            .map(|(w, &sides)| {
+                let (forward, link) = match (link_of.get(&[w[0], w[1]]), link_of.get(&[w[1], w[0]]))
+                {
+                    (Some(&l), _) => (true, l),
+                    (None, Some(&l)) => (false, l),
+                    (None, None) => {
+                        return Err(FrameError::Parameter {
+                            name: "pieces",
+                            value: w[0] as Real,
+                            why: "two consecutive units of a strip piece are not linked",
+                        })
+                    }
+                };
+                Ok(Join {
+                    link,
+                    sides,
+                    forward,
+                    s: 0.0,
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let piece = Piece {
+            units: p.units.clone(),
+            joins,
+        };
+        let now = problem.piece_length(&piece, &x, &units, None);
+        problem.pieces.push((piece, now * p.room));
     }
     let start = problem.figures(&x, &units);
     let mut iterations = 0;
@@ -605,6 +680,19 @@ mod tests {
                 .map(|l| 3 * nv + 9 * nf + l)
                 .collect(),
             edge_ratios: vec![1.0; nf],
+            // a two-unit strip piece on a sheet far too short: its length row acts
+            pieces: vec![(
+                Piece {
+                    units: solved.links[0].faces.to_vec(),
+                    joins: vec![Join {
+                        link: 0,
+                        sides: solved.links[0].slots,
+                        forward: true,
+                        s: 0.0,
+                    }],
+                },
+                10.0,
+            )],
             emphasis: vec![1.0; solved.links.len()],
             stiffness: 1.0,
             legs: 1.0,
