@@ -200,6 +200,17 @@ def seg_pierces_quad(b0, b1, Q):
     return point_in_convex(q2, np.array([np.dot(x - c, u), np.dot(x - c, v)]))
 
 
+def depth_in(poly, p):
+    """Distance from p, inside the convex polygon poly, to its outline."""
+    n = len(poly)
+    depth = math.inf
+    for i in range(n):
+        a = poly[(i + 1) % n] - poly[i]
+        d = p - poly[i]
+        depth = min(depth, abs(a[0] * d[1] - a[1] * d[0]) / np.linalg.norm(a))
+    return depth
+
+
 def point_in_convex(poly, p):
     s = None
     n = len(poly)
@@ -442,7 +453,10 @@ def main(argv=None):
                 if hp[j] is not None:
                     problems.append(("legs", uid[ui], "two slot pairs claim leg %d" % j))
                 hp[j], rp[j] = h[1], r[1]
-                if np.linalg.norm(h[1] - ctr) >= np.linalg.norm(r[1] - ctr):
+                # the leg joins the hub on the inner slot track and the rim on the
+                # outer one: the hub neck lies deeper inside the tile (a leg width
+                # and a slot), on any tile however skewed
+                if depth_in(T, h[1]) <= depth_in(T, r[1]):
                     inner_violations += 1
                     problems.append(("legs", uid[ui], "leg %d hub neck not inner" % j))
             if any(x is None for x in hp):
