@@ -78,13 +78,21 @@ fn the_default_build_folds_from_its_dxf_as_our_own_code_measures_it() {
     assert!(f(&fig, "lap_min") >= 25.0, "{fig}");
     // and frame.json reports the laps the parts show
     assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{fig}");
-    // `spinvalence check DIR` folds the same parts and agrees on what holds
+    // `spinvalence check DIR` folds the same parts and agrees on what holds: on the default
+    // build every row, the joints too (plates of neighbouring strips neither apart nor into
+    // each other, bridges within their span, bend and twist)
     let checked = dir.run(&["check", "out"]);
+    checked.expect_code(0);
     for row in [
         "neck as cut at its pin in frame.json",
         "leg between its necks, folded into the pose",
         "hub lap as cut",
         "hub lap = frame.json hub_overlap",
+        "weld: plates of neighbouring strips apart",
+        "plates of neighbouring strips reach into each other",
+        "bridge length folded - flat",
+        "bridge bent in its plane",
+        "bridge twisted",
         "units that cannot be rebuilt from their cut",
     ] {
         let line = checked

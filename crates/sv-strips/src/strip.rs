@@ -467,7 +467,7 @@ pub struct StripPlan {
 
 /// How far short of `max_length` a piece's planned growth stops (mm): the piece's length
 /// along its units stands in for its flat pattern's length in the joint solve.
-const PIECE_LENGTH_MARGIN: f64 = 2.0;
+const PIECE_LENGTH_MARGIN: f64 = 6.0;
 
 /// How much room to grow a piece is planned with where that takes no more pieces: closing
 /// the joints stretches tiles by up to about 1 %.

@@ -95,7 +95,7 @@ pub struct PieceLength {
 impl Default for JointOptions {
     fn default() -> Self {
         Self {
-            max_iterations: 80,
+            max_iterations: 200,
             closeness: 0.05,
             min_overlap: 0.0,
             overlap: None,
