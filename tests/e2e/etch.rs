@@ -285,7 +285,7 @@ fn upright(d: P) -> bool {
 
 /// Every label of `dir/out` read upright in its strip DXF and on its sheet. Returns the
 /// number of labels checked on the sheets that the nest turned half round.
-fn check_labels_upright(dir: &Dir) -> usize {
+fn check_labels_upright(dir: &Dir) -> (usize, usize) {
     let out = dir.join("out");
     let strips = read_json(&out.join("strips.json"));
     let nest = read_json(&out.join("nest.json"));
@@ -317,7 +317,7 @@ fn check_labels_upright(dir: &Dir) -> usize {
         .filter(|f| f.ends_with(".dxf"))
         .collect::<Vec<_>>();
     files.sort();
-    let mut turned = 0;
+    let (mut turned, mut half_turned) = (0, 0);
     let sheets = nest["sheets"].as_array().unwrap();
     assert_eq!(files.len(), sheets.len());
     for (sheet, file) in sheets.iter().zip(&files) {
@@ -331,6 +331,9 @@ fn check_labels_upright(dir: &Dir) -> usize {
                 num(&p["translation"][1], "y"),
             ];
             let (s, c) = rot.sin_cos();
+            if c < 0.0 {
+                half_turned += 1;
+            }
             for l in by_id[id]["labels"].as_array().unwrap() {
                 let [x, y] = [num(&l["at"][0], "x"), num(&l["at"][1], "y")];
                 let at = [c * x - s * y + t[0], s * x + c * y + t[1]];
@@ -346,7 +349,7 @@ fn check_labels_upright(dir: &Dir) -> usize {
             }
         }
     }
-    turned
+    (turned, half_turned)
 }
 
 #[test]
@@ -375,8 +378,12 @@ fn the_saddle_marks_its_hubs_too() {
 fn labels_read_upright_in_the_strips_and_on_the_sheets() {
     let (dir, out) = default_build();
     out.expect_code(0);
-    let turned = check_labels_upright(dir);
-    // the nest turns strips half round: their labels were turned back upright
-    eprintln!("{turned} labels turned upright on the sheets");
-    assert!(turned > 0);
+    let (turned, half_turned) = check_labels_upright(dir);
+    // where the nest turns strips half round, their labels were turned back upright
+    eprintln!("{turned} labels turned upright on the {half_turned} strips turned half round");
+    assert_eq!(
+        turned > 0,
+        half_turned > 0,
+        "{turned} labels, {half_turned} strips"
+    );
 }

@@ -24,15 +24,17 @@ pub struct Label {
 }
 
 /// The direction `angle` (rad) or its opposite, whichever reads upright: in (-90, 90]
-/// degrees of +x (straight up reads bottom to top).
+/// degrees of +x (straight up reads bottom to top; a baseline within 1e-9 rad of straight
+/// down, as rounding leaves one, is turned up).
 pub fn upright(angle: f64) -> f64 {
     use std::f64::consts::{FRAC_PI_2, PI, TAU};
+    const ROUNDING: f64 = 1e-9;
     // (-pi, pi]
     let a = angle.rem_euclid(TAU);
     let a = if a > PI { a - TAU } else { a };
-    if a > FRAC_PI_2 {
+    if a > FRAC_PI_2 + ROUNDING {
         a - PI
-    } else if a <= -FRAC_PI_2 {
+    } else if a <= -FRAC_PI_2 + ROUNDING {
         a + PI
     } else {
         a
@@ -420,7 +422,7 @@ mod tests {
         for k in -40..=40 {
             let a = k as f64 * 0.1;
             let u = upright(a);
-            assert!(u > -FRAC_PI_2 && u <= FRAC_PI_2 + 1e-12, "{a} -> {u}");
+            assert!(u > -FRAC_PI_2 && u <= FRAC_PI_2 + 1e-9, "{a} -> {u}");
             // the same line: a or a + pi, modulo a turn
             let d = (u - a).rem_euclid(PI);
             assert!(d < 1e-9 || PI - d < 1e-9, "{a} -> {u}");
@@ -429,6 +431,8 @@ mod tests {
         assert!((upright(PI - 0.3) + 0.3).abs() < 1e-12);
         assert!((upright(-FRAC_PI_2) - FRAC_PI_2).abs() < 1e-12);
         assert!((upright(FRAC_PI_2) - FRAC_PI_2).abs() < 1e-12);
+        // straight down but for rounding reads up
+        assert!((upright(-FRAC_PI_2 + 1e-15) - FRAC_PI_2).abs() < 1e-12);
     }
 
     #[test]
