@@ -245,22 +245,61 @@ fn weldable(solved: &sv_frame::Solved, min_overlap: f64, cfg: &BuildConfig) -> R
     let short = overlaps.iter().filter(|&&o| o < min_overlap).count();
     let l = &solved.links[worst];
     let deficit = min_overlap - lap;
-    let p = &cfg.profile;
+    let shallower = deficit / (2.0 * 2f64.sqrt());
     bail!(
         "hub laps too short to weld: {short} of {} links below the minimum overlap {} mm, \
          the shortest {} mm between units {} and {}; raise secondary.unit_size to about {:.0} mm, \
-         or make the hub lie {:.1} mm less deep in its tile (profile.leg_width {} or \
-         profile.rim_width {} smaller, down to their minimum web), or lower primary.min_overlap",
+         or make the hub lie {:.1} mm less deep in its tile ({}), or lower primary.min_overlap",
         overlaps.len(),
         number(min_overlap),
         number(lap),
         l.faces[0],
         l.faces[1],
         (cfg.secondary.unit_size + deficit / (2f64.sqrt() - 1.0)).ceil(),
-        deficit / (2.0 * 2f64.sqrt()),
-        number(p.leg_width),
-        number(p.rim_width),
+        shallower,
+        shallower_hub(&cfg.profile, shallower),
     )
+}
+
+/// How the hub can lie `by` mm less deep in its tile: narrower legs or rim where the
+/// sheet's rules allow it, else the thickest sheet in 0.5 mm steps whose least profile
+/// does it, with its widths.
+fn shallower_hub(p: &sv_strips::ProfileParams, by: f64) -> String {
+    let least = p.least_for(p.thickness);
+    if least
+        .as_ref()
+        .is_some_and(|l| l.hub_inset() <= p.hub_inset() - by)
+    {
+        return format!(
+            "profile.leg_width {} or profile.rim_width {} smaller, down to their minimum web",
+            number(p.leg_width),
+            number(p.rim_width)
+        );
+    }
+    let thinner = (1..)
+        .map(|k| p.thickness - 0.5 * k as f64)
+        .take_while(|&t| t > 0.0)
+        .filter_map(|t| p.least_for(t))
+        .find(|l| l.hub_inset() <= p.hub_inset() - by);
+    match thinner {
+        Some(l) => format!(
+            "the legs and rim are the narrowest {} mm sheet allows: a thinner sheet, \
+             profile.thickness = {}, leg_width = {}, neck_width = {}, rim_width = {}, \
+             slot_width = {}, neck_length = {}",
+            number(p.thickness),
+            number(l.thickness),
+            number(l.leg_width),
+            number(l.neck_width),
+            number(l.rim_width),
+            number(l.slot_width),
+            number(l.neck_length)
+        ),
+        None => format!(
+            "no sheet's least profile does: the legs and rim are the narrowest {} mm sheet \
+             allows",
+            number(p.thickness)
+        ),
+    }
 }
 
 pub fn run(args: &BuildArgs) -> Result<Outcome> {
@@ -789,4 +828,57 @@ fn summary_rows(
         ],
     ];
     rows.into_iter().map(|r| r.to_vec()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shallower_hub;
+    use sv_strips::ProfileParams;
+
+    /// The value after `key = ` in `text`.
+    fn value(text: &str, key: &str) -> f64 {
+        let at = text.find(&format!("{key} = ")).unwrap() + key.len() + 3;
+        text[at..]
+            .split([',', ')', ' '])
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    }
+
+    #[test]
+    fn a_hub_too_deep_names_narrower_legs_or_the_sheet_that_allows_them() {
+        // legs wider than the sheet needs: narrower legs
+        let wide = ProfileParams {
+            leg_width: 20.0,
+            ..ProfileParams::default()
+        };
+        assert!(shallower_hub(&wide, 1.0).contains("profile.leg_width 20"));
+        // the default's legs and rim are the least 2.5 mm sheet allows: a thinner sheet,
+        // whose widths are valid and put the hub at least 1.3 mm less deep
+        let d = ProfileParams::default();
+        let text = shallower_hub(&d, 1.3);
+        let named = ProfileParams {
+            thickness: value(&text, "profile.thickness"),
+            leg_width: value(&text, "leg_width"),
+            neck_width: value(&text, "neck_width"),
+            rim_width: value(&text, "rim_width"),
+            slot_width: value(&text, "slot_width"),
+            neck_length: value(&text, "neck_length"),
+            fillet_radius: 1.0,
+            ..d.clone()
+        };
+        assert_eq!(named.thickness, 2.0, "{text}");
+        named.validate().unwrap();
+        // half the joint slot, the rim, two slots and the leg
+        let inset =
+            named.neck_length / 2.0 + named.rim_width + 2.0 * named.slot_width + named.leg_width;
+        assert!(inset <= 28.125 - 1.3, "{inset}: {text}");
+        // more than any sheet gives: said so
+        assert!(
+            shallower_hub(&d, 20.0).contains("no sheet"),
+            "{}",
+            shallower_hub(&d, 20.0)
+        );
+    }
 }

@@ -160,6 +160,31 @@ impl ProfileParams {
         (1.5 * self.thickness).max(3.0)
     }
 
+    /// The profile of sheet `thickness` with every width the least its rules allow
+    /// (docs/fabrication.md), the kerf and lead-in room of `self` and its fillet where the
+    /// joint slot takes it (else the least inside radius): the hub as far out in its tile
+    /// as that sheet lets it lie. `None` where those rules leave no valid
+    /// profile (below 1.5 mm the joint slot cannot be both 1-2 t long and 3 mm wide).
+    pub fn least_for(&self, thickness: f64) -> Option<Self> {
+        let t = thickness;
+        let web = (1.5 * t).max(3.0);
+        let p = Self {
+            thickness: t,
+            slot_width: web.max(self.kerf + 0.5).max(t),
+            rim_width: web,
+            neck_width: 3.0 * t,
+            leg_width: (6.0 * t).max(web),
+            neck_length: web,
+            fillet_radius: if 2.0 * self.fillet_radius < web {
+                self.fillet_radius
+            } else {
+                MIN_INSIDE_RADIUS
+            },
+            ..self.clone()
+        };
+        p.validate().ok().map(|()| p)
+    }
+
     /// The shortest hub lap that can carry a stress-carrying lap weld: max(5 t, 25 mm)
     /// (AWS D1.1), the default of `[primary] min_overlap`.
     pub fn min_overlap(&self) -> f64 {
@@ -362,6 +387,21 @@ mod tests {
         assert!(p.slot_width >= p.min_slot_end_diameter());
         assert!(p.neck_width <= p.leg_width / 2.0 && p.neck_width >= 3.0 * p.thickness);
         assert!(StripOptions::default().max_length == 2980.0);
+    }
+
+    #[test]
+    fn the_least_profile_of_a_sheet_is_valid_and_puts_the_hub_where_its_rules_let_it() {
+        let d = ProfileParams::default();
+        // the default is the least profile of its own sheet
+        assert_eq!(d.least_for(d.thickness), Some(d.clone()));
+        let thin = d.least_for(1.5).unwrap();
+        // hub inset: half the joint slot, rim, two slots, the leg: 1.5 + 3 + 6 + 9
+        assert!(
+            (thin.hub_inset() - 19.5).abs() < 1e-12,
+            "{}",
+            thin.hub_inset()
+        );
+        assert!(d.least_for(1.0).is_none());
     }
 
     #[test]
