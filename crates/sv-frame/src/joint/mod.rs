@@ -15,6 +15,7 @@
 //! - the hub mesh: faces planar, vertices on the target's tangent plane (and boundary line)
 //!   where they started, a light pull back along the surface.
 
+mod piece;
 mod problem;
 mod unit;
 
@@ -29,8 +30,9 @@ use crate::{
     evaluate, FrameError, FrameUnits, Hub, JointKind, JointLimits, JointRecord, Joints, QuadMesh,
     Solved, UnitPose,
 };
+use piece::{Join, Piece};
 pub(crate) use problem::joint_record;
-use problem::{edge_ratio, Join, Piece, Problem};
+use problem::{edge_ratio, Problem};
 use unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints};
 
 /// The target surface the hub mesh stays on.
