@@ -16,6 +16,10 @@ use tokio_tungstenite::tungstenite::client::IntoClientRequest;
 use tokio_tungstenite::tungstenite::Message;
 use tokio_tungstenite::WebSocketStream;
 
+/// How long a message that is due may take: long enough that a busy machine's pause is
+/// never taken for silence (a test that passes waits far less).
+pub const WAIT: Duration = Duration::from_secs(30);
+
 /// Operator token used by the tests.
 pub const TOKEN: &str = "op-secret-2026";
 /// Viewer token used by the tests.
@@ -115,7 +119,8 @@ impl<S: AsyncRead + AsyncWrite + Unpin> Client<S> {
         self.ws.send(Message::text(t.to_string())).await.unwrap();
     }
 
-    /// Next text message (validated), or `None` when the connection ends.
+    /// Next text message (validated), `Err` with the close code when the connection ends,
+    /// or `None` when nothing came within `wait`.
     pub async fn try_recv(&mut self, wait: Duration) -> Option<Result<Value, Option<u16>>> {
         loop {
             let next = tokio::time::timeout(wait, self.ws.next()).await.ok()?;
@@ -136,7 +141,7 @@ impl<S: AsyncRead + AsyncWrite + Unpin> Client<S> {
 
     /// Next text message (validated); panics on timeout or close.
     pub async fn recv(&mut self) -> Value {
-        match self.try_recv(Duration::from_secs(5)).await {
+        match self.try_recv(WAIT).await {
             Some(Ok(v)) => v,
             other => panic!("expected a message, got {other:?}"),
         }
@@ -161,7 +166,7 @@ impl<S: AsyncRead + AsyncWrite + Unpin> Client<S> {
     /// Wait for the close code (skipping messages).
     pub async fn closed(&mut self) -> Option<u16> {
         loop {
-            match self.try_recv(Duration::from_secs(5)).await {
+            match self.try_recv(WAIT).await {
                 Some(Ok(_)) => continue,
                 Some(Err(code)) => return code,
                 None => panic!("connection did not close"),
