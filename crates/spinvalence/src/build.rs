@@ -690,40 +690,19 @@ fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
         }
         let id = |u: usize| frame.units.get(u).map_or("?", |r| r.id.as_str());
         let name = format!("{} - {}", id(l.units[0]), id(l.units[1]));
-        let (excess, what) = match j.kind {
-            sv_frame::JointKind::Bridge => {
-                bridges += 1;
-                let worst = [
-                    (
-                        j.gap / limits.bridge_gap,
-                        format!("apart {} mm", number(j.gap)),
-                    ),
-                    (
-                        j.bend.abs() / limits.bend,
-                        format!("bent {:.1} deg", j.bend.abs().to_degrees()),
-                    ),
-                    (
-                        j.twist.abs() / limits.twist,
-                        format!("twisted {:.1} deg", j.twist.abs().to_degrees()),
-                    ),
-                ];
-                worst
-                    .into_iter()
-                    .fold((0.0, String::new()), |a, b| if b.0 > a.0 { b } else { a })
+        match j.kind {
+            sv_frame::JointKind::Bridge => bridges += 1,
+            sv_frame::JointKind::Weld => welds += 1,
+        }
+        let (excess, measure) = limits.worst(&j);
+        let what = match measure {
+            sv_frame::JointMeasure::Gap => format!("apart {} mm", number(j.gap)),
+            sv_frame::JointMeasure::Bend => format!("bent {:.1} deg", j.bend.abs().to_degrees()),
+            sv_frame::JointMeasure::Twist => {
+                format!("twisted {:.1} deg", j.twist.abs().to_degrees())
             }
-            sv_frame::JointKind::Weld => {
-                welds += 1;
-                if j.gap / limits.weld_gap >= j.collision / limits.collision {
-                    (
-                        j.gap / limits.weld_gap,
-                        format!("apart {} mm", number(j.gap)),
-                    )
-                } else {
-                    (
-                        j.collision / limits.collision,
-                        format!("{} mm into each other", number(j.collision)),
-                    )
-                }
+            sv_frame::JointMeasure::Collision => {
+                format!("{} mm into each other", number(j.collision))
             }
         };
         open.push((excess, format!("{name} {what}")));

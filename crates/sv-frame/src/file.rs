@@ -90,20 +90,48 @@ impl JointLimits {
     /// How far the joint is from its limits: the largest of its figures (for its kind, the
     /// plates into each other included) as a multiple of its limit; at most 1 when it holds.
     pub fn excess(&self, j: &JointRecord) -> f64 {
+        self.worst(j).0
+    }
+
+    /// The measure of `j` furthest beyond (or nearest to) its limit, and its value as a
+    /// multiple of that limit (bridges: gap, bend, twist; welds: gap; both: collision; the
+    /// first of a tie).
+    pub fn worst(&self, j: &JointRecord) -> (f64, JointMeasure) {
         let over = |v: f64, limit: f64| v.abs() / limit.max(1e-9);
-        let shape = match j.kind {
-            JointKind::Bridge => over(j.gap, self.bridge_gap)
-                .max(over(j.bend, self.bend))
-                .max(over(j.twist, self.twist)),
-            JointKind::Weld => over(j.gap, self.weld_gap),
+        let measures = match j.kind {
+            JointKind::Bridge => vec![
+                (over(j.gap, self.bridge_gap), JointMeasure::Gap),
+                (over(j.bend, self.bend), JointMeasure::Bend),
+                (over(j.twist, self.twist), JointMeasure::Twist),
+            ],
+            JointKind::Weld => vec![(over(j.gap, self.weld_gap), JointMeasure::Gap)],
         };
-        shape.max(over(j.collision, self.collision))
+        measures
+            .into_iter()
+            .chain([(over(j.collision, self.collision), JointMeasure::Collision)])
+            .fold(
+                (0.0, JointMeasure::Gap),
+                |a, b| if b.0 > a.0 { b } else { a },
+            )
     }
 
     /// The joint, taken as a bridge, is within these limits.
     pub fn bridge_holds(&self, j: &JointRecord) -> bool {
         j.gap <= self.bridge_gap && j.bend.abs() <= self.bend && j.twist.abs() <= self.twist
     }
+}
+
+/// A measure of a joint that [`JointLimits`] bounds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointMeasure {
+    /// How far apart (a bridge's fold line, a weld's plates).
+    Gap,
+    /// A bridge bent in its plane.
+    Bend,
+    /// A bridge twisted.
+    Twist,
+    /// One plate into the other.
+    Collision,
 }
 
 impl Default for JointLimits {

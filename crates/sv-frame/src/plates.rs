@@ -9,29 +9,6 @@ pub fn plate_normal(q: &[Point3; 4]) -> Option<Vector3> {
     (q[2] - q[0]).cross(&(q[3] - q[1])).try_normalize(1e-12)
 }
 
-/// How deep side `m` of plate `b` passes through plate `a` (mm, 0 when it does not): the
-/// distance inside `a`, from `a`'s side `k`, where `b`'s side crosses `a`'s plane.
-pub fn pass_through(a: &[Point3; 4], k: usize, b: &[Point3; 4], m: usize) -> Real {
-    let Some(n) = plate_normal(a) else {
-        return 0.0;
-    };
-    let (p, q) = (b[m], b[(m + 1) % 4]);
-    let (dp, dq) = ((p - a[0]).dot(&n), (q - a[0]).dot(&n));
-    if dp * dq > 0.0 || dp == dq {
-        return 0.0;
-    }
-    let x = p + (q - p) * (dp / (dp - dq));
-    // inside the convex plate: on the inner side of every edge
-    let inside = |i: usize| {
-        let (s, t) = (a[i], a[(i + 1) % 4]);
-        n.cross(&(t - s)).normalize().dot(&(x - s))
-    };
-    if (0..4).any(|i| inside(i) < 0.0) {
-        return 0.0;
-    }
-    inside(k)
-}
-
 /// The point of plate `a` (a convex quad on its mid-plane, `thickness` thick) nearest `x`.
 pub fn nearest_on_plate(a: &[Point3; 4], thickness: Real, x: &Point3) -> Point3 {
     let Some(n) = plate_normal(a) else {
@@ -128,22 +105,6 @@ mod tests {
             Point3::new(x0 + 1.0, 1.0, z),
             Point3::new(x0, 1.0, z),
         ]
-    }
-
-    #[test]
-    fn a_side_through_a_plate_is_measured_from_the_facing_side() {
-        let a = square(0.0, 0.0);
-        // b's side 3 (x = 0.8) stands across a's plane, 0.2 inside a from a's side 1 (x = 1)
-        let b = [
-            Point3::new(0.8, 0.5, -1.0),
-            Point3::new(1.8, 0.5, -1.0),
-            Point3::new(1.8, 0.5, 1.0),
-            Point3::new(0.8, 0.5, 1.0),
-        ];
-        assert!((pass_through(&a, 1, &b, 3) - 0.2).abs() < 1e-12);
-        // moved out beyond a's side: no pass-through
-        let b2 = b.map(|p| p + Vector3::new(0.5, 0.0, 0.0));
-        assert_eq!(pass_through(&a, 1, &b2, 3), 0.0);
     }
 
     #[test]

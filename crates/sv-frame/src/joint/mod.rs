@@ -306,6 +306,22 @@ fn chart_of(pose: &UnitPose, side: sv_unit::Side) -> Deployment {
     }
 }
 
+/// Each unit's primary plate pose in the world from a solve: tile point `r` at `q r + t`.
+fn plate_poses(solved: &Solved) -> Vec<PlatePose> {
+    solved
+        .hubs
+        .iter()
+        .zip(&solved.poses)
+        .map(|(hub, p)| {
+            let q = hub.frame * p.rotation.transpose();
+            PlatePose {
+                q,
+                t: hub.centre.coords - q * p.translation,
+            }
+        })
+        .collect()
+}
+
 /// Close the joints of a solved frame: move the hub mesh `mesh` (whose vertices stay on
 /// `surface`) and every unit's primary plate together, the legs as cut held. `bridges[l]`
 /// says whether link `l` joins two consecutive units of a strip. Returns the new mesh and
@@ -370,19 +386,7 @@ pub fn close_joints(
         nv,
         near: options.closeness * scale,
     };
-    // each primary plate's pose in the world: tile point r at q r + t
-    let mut poses: Vec<PlatePose> = solved
-        .hubs
-        .iter()
-        .zip(&solved.poses)
-        .map(|(hub, p)| {
-            let q = hub.frame * p.rotation.transpose();
-            PlatePose {
-                q,
-                t: hub.centre.coords - q * p.translation,
-            }
-        })
-        .collect();
+    let mut poses = plate_poses(solved);
     let n = 3 * nv + 9 * nf + links;
     let mut x = vec![0.0; n];
     for (v, p) in mesh.vertices.iter().enumerate() {
@@ -699,18 +703,7 @@ mod tests {
             stiffness: 1.0,
             legs: 1.0,
         };
-        let poses: Vec<PlatePose> = solved
-            .hubs
-            .iter()
-            .zip(&solved.poses)
-            .map(|(hub, p)| {
-                let q = hub.frame * p.rotation.transpose();
-                PlatePose {
-                    q,
-                    t: hub.centre.coords - q * p.translation,
-                }
-            })
-            .collect();
+        let poses = plate_poses(&solved);
         let mut x = vec![0.0; 3 * nv + 9 * nf + solved.links.len()];
         for (v, p) in mesh.vertices.iter().enumerate() {
             x[3 * v..3 * v + 3].copy_from_slice(p.coords.as_slice());

@@ -244,12 +244,9 @@ impl Problem<'_> {
                 let q = self.quad(x, f);
                 let p = self.pose(x, f, poses);
                 let shape = self.shape(x, f);
-                if jacobian {
-                    self.model.jacobian(&q, &p, shape)
-                } else {
-                    self.model.points(&q, &p, shape)
-                }
-                .map_err(|e| (f, e))
+                self.model
+                    .points(&q, &p, shape, jacobian)
+                    .map_err(|e| (f, e))
             })
             .collect()
     }

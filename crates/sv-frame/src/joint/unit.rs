@@ -60,7 +60,7 @@ impl PlatePose {
     }
 }
 
-/// A unit's points and leg errors, and with [`Model::jacobian`] their derivatives.
+/// A unit's points and leg errors, and with [`Model::points`]' `derivatives` theirs.
 #[derive(Clone, Debug)]
 pub(crate) struct UnitPoints {
     pub points: [Point3; POINTS],
@@ -145,31 +145,25 @@ impl Model {
         Ok((points, errors))
     }
 
-    /// The unit's points and leg errors.
+    /// The unit's points and leg errors; with `derivatives`, their derivatives along its
+    /// [`INPUTS`] too (central differences: each evaluation is a hub fit and a cut, no
+    /// solve).
     pub fn points(
         &self,
         quad: &[Point3; 4],
         pose: &PlatePose,
         shape: Shape,
+        derivatives: bool,
     ) -> Result<UnitPoints, UnitFailure> {
         let (points, legs) = self.eval(quad, pose, shape)?;
-        Ok(UnitPoints {
-            points,
-            legs,
-            d: None,
-            dl: None,
-        })
-    }
-
-    /// The unit's points and leg errors with their derivatives along its [`INPUTS`]
-    /// (central differences: each evaluation is a hub fit and a cut, no solve).
-    pub fn jacobian(
-        &self,
-        quad: &[Point3; 4],
-        pose: &PlatePose,
-        shape: Shape,
-    ) -> Result<UnitPoints, UnitFailure> {
-        let (points, legs) = self.eval(quad, pose, shape)?;
+        if !derivatives {
+            return Ok(UnitPoints {
+                points,
+                legs,
+                d: None,
+                dl: None,
+            });
+        }
         let mut d = Box::new([[Vector3::zeros(); INPUTS]; POINTS]);
         let mut dl = Box::new([[0.0; INPUTS]; 4]);
         let h = 1e-4;
@@ -245,7 +239,7 @@ mod tests {
             spin: model.spin,
             scale: [1.0, 1.0],
         };
-        let u = model.jacobian(&quad, &pose, shape).unwrap();
+        let u = model.points(&quad, &pose, shape, true).unwrap();
         assert!(u.legs.iter().all(|e| e.abs() < 1e-6), "{:?}", u.legs);
         // a 0.01 mm shift along x changes the legs by their x direction cosines
         let moved = model
@@ -253,6 +247,7 @@ mod tests {
                 &quad,
                 &pose.moved(&Vector3::zeros(), &Vector3::new(0.01, 0.0, 0.0)),
                 shape,
+                false,
             )
             .unwrap();
         let dl = u.dl.as_ref().unwrap();
