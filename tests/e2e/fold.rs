@@ -78,6 +78,8 @@ fn the_default_build_folds_from_its_dxf_as_our_own_code_measures_it() {
     assert!(f(&fig, "lap_min") >= 25.0, "{fig}");
     // and frame.json reports the laps the parts show
     assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{fig}");
+    // the joints as our own code measures them on the plates the outline cuts
+    joints_hold("default build", &fig);
     // `spinvalence check DIR` folds the same parts and agrees on what holds: on the default
     // build every row, the joints too (plates of neighbouring strips neither apart nor into
     // each other, bridges within their span, bend and twist)
@@ -102,20 +104,67 @@ fn the_default_build_folds_from_its_dxf_as_our_own_code_measures_it() {
             .unwrap_or_else(|| panic!("no row {row}: {checked:?}"));
         assert!(line.ends_with("ok"), "{line}");
     }
-    // its smallest lap is ours within the claim tolerance
-    let lap = checked
-        .stdout
-        .lines()
-        .find(|l| l.starts_with("hub lap as cut"))
-        .and_then(|l| l.split_whitespace().find_map(|w| w.parse::<f64>().ok()))
-        .unwrap();
-    assert!((lap - f(&fig, "lap_min")).abs() <= 0.1, "{lap} vs {fig}");
+    // its smallest lap, widest weld and deepest reach are ours within the claim tolerance
+    agrees_with_check(&checked, &fig);
+}
+
+/// The first number of `check`'s row that starts with `name`.
+fn worst(out: &crate::util::Output, name: &str) -> f64 {
+    row(out, name)
+        .split_whitespace()
+        .find_map(|w| w.parse::<f64>().ok())
+        .unwrap_or_else(|| panic!("no figure in row {name}: {out:?}"))
+}
+
+/// `spinvalence check`'s worst hub lap, weld gap and reach are the fold check's, 0.1 mm.
+fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
+    for (name, ours) in [
+        ("hub lap as cut", "lap_min"),
+        ("weld: plates of neighbouring strips apart", "weld_gap_max"),
+        (
+            "plates of neighbouring strips reach into each other",
+            "reach_max",
+        ),
+    ] {
+        let theirs = worst(checked, name);
+        assert!(
+            (theirs - f(fig, ours)).abs() <= 0.1,
+            "{name}: {theirs} vs {fig}"
+        );
+    }
+}
+
+/// Issue 14's and 15's joints by our own measure: every bridge of every strip found in the
+/// outline, within 0.5 mm of its flat span and its bend and twist limits (the bend within a
+/// few degrees); every weld between strips found, its plates at most 1.5 mm apart and as
+/// frame.json says; no plate 0.1 mm into its neighbour.
+fn joints_hold(what: &str, fig: &Value) {
+    assert!(f(fig, "bridges_checked") > 0.0, "{what}: {fig}");
+    assert_eq!(
+        fig["bridges_checked"], fig["bridges_in_strips"],
+        "{what}: {fig}"
+    );
+    assert!(f(fig, "bridge_span_max") <= 0.5, "{what}: {fig}");
+    assert!(f(fig, "bridge_bend_limit_deg") <= 5.0, "{what}: {fig}");
+    assert!(
+        f(fig, "bridge_bend_max_deg") <= f(fig, "bridge_bend_limit_deg"),
+        "{what}: {fig}"
+    );
+    assert!(
+        f(fig, "bridge_twist_max_deg") <= f(fig, "bridge_twist_limit_deg"),
+        "{what}: {fig}"
+    );
+    assert!(f(fig, "welds_checked") > 0.0, "{what}: {fig}");
+    assert!(f(fig, "weld_gap_max") <= 1.5, "{what}: {fig}");
+    assert!(f(fig, "weld_claim_error_max") <= 0.1, "{what}: {fig}");
+    assert!(f(fig, "reach_max") <= 0.1, "{what}: {fig}");
 }
 
 /// Issue 14's acceptance on the other targets at 300 mm with the default parameters, by our
 /// own fold code: every leg within 0.5 mm of its length, every hub lap of at least the weld
 /// minimum and reported within 0.1 mm of what the parts show, and the slots as the profile
-/// rules draw them.
+/// rules draw them. The joints close on the dome, the vault and the hypar; on the saddle
+/// some stay open (docs/geometry.md 6.9), and the build and `check` say so with our figures.
 #[test]
 fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
     let hypar = concat!(
@@ -130,11 +179,23 @@ fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
         let frame = read_json(&dir.join("out/frame.json"));
         let units = frame["units"].as_array().unwrap().len();
         let (code, stdout, fig) = fold_check(&dir);
-        assert_eq!(code, 0, "{target}: {stdout}");
         assert_eq!(fig["legs_checked"], 4 * units, "{target}: {fig}");
         assert!(f(&fig, "leg_error_max") <= 0.5, "{target}: {fig}");
         assert!(f(&fig, "lap_min") >= 25.0, "{target}: {fig}");
         assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{target}: {fig}");
+        assert!(f(&fig, "weld_claim_error_max") <= 0.1, "{target}: {fig}");
+        let checked = dir.run(&["check", "out"]);
+        agrees_with_check(&checked, &fig);
+        if target == "builtin:saddle" {
+            // open joints are named, by the build's check as by ours
+            checked.expect_code(1);
+            assert_eq!(code, 1, "{target}: {stdout}");
+            assert!(row(&checked, "weld: plates of neighbouring strips apart").ends_with("FAIL"));
+        } else {
+            assert_eq!(code, 0, "{target}: {stdout}");
+            checked.expect_code(0);
+            joints_hold(target, &fig);
+        }
     }
 }
 

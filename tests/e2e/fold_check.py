@@ -18,6 +18,19 @@ Checks
      of links[].hub_overlap.
   3. (informational) largest primary gap and count of links whose facing
      primary sides pass through each other.
+  4. bridges: each primary plate as the OUTSIDE outline cuts it (per tile side the
+     longest straight outline segment along it, on it or up to 5 mm inside); a
+     bridge is where the outline crosses the joint line of two units of a strip
+     (two crossings).  At both its sides the bridge's ends on the two plates are
+     moved to 3D with their plates: | folded - flat | <= 0.5 mm; bend (in the
+     first plate's plane) and twist of the joint line within frame.json's
+     params.joint_limits.
+  5. welds between strips: from the joint point (links[].joint.along on the first
+     unit's facing side) to the other plate as cut, thickened to t either side of
+     its mid-plane: <= 1.5 mm, and within 0.1 mm of links[].joint.gap.
+  6. collisions: how far each facing edge of two strips' plates reaches into the
+     other plate (depth inside its outline and inside its slab t either side,
+     the smaller; the exact largest along the edge): <= 0.1 mm.
 
 Exit status: 0 all pass, 1 some check failed, 2 input files unreadable.
 """
@@ -41,6 +54,9 @@ LEG_TOL = 0.5
 PIN_TOL = 0.5
 LAP_CLAIM_TOL = 0.1
 KABSCH_TOL = 1e-3
+BRIDGE_TOL = 0.5     # bridge span, folded - flat (mm)
+WELD_TOL = 1.5       # plates of neighbouring strips apart at their weld (mm)
+REACH_TOL = 0.1      # plates into each other (mm)
 
 
 # ----------------------------------------------------------------- geometry
@@ -308,6 +324,149 @@ def necks_between(fa, fb, K, thr, prims_a=None, prims_b=None):
     return merged
 
 
+def side_frame(T, k):
+    """Side k of the convex flat tile T: its start, unit direction, outward unit normal and
+    length."""
+    a, b = T[k], T[(k + 1) % len(T)]
+    ln = float(np.linalg.norm(b - a))
+    d = (b - a) / ln
+    n = np.array([d[1], -d[0]])
+    if np.dot(n, 0.5 * (a + b) - T.mean(0)) < 0:
+        n = -n
+    return a, d, n, ln
+
+
+PLATE_INSET_MAX = 5.0
+
+
+def plate_as_cut(T, lines):
+    """The primary plate of flat tile T as the strip outline cuts it: per side the longest
+    straight outline segment parallel to the side (within 0.6 deg), on it or up to 5 mm
+    inside; the corners where those lines meet (fillets ignored).  (quad, per-side lines)
+    or None when a side has no such segment."""
+    edge = []
+    for k in range(4):
+        a, d, n, ln = side_frame(T, k)
+        best = None
+        for p, q in lines:
+            v = q - p
+            lv = float(np.linalg.norm(v))
+            if lv < 1.0 or abs(v[0] * d[1] - v[1] * d[0]) / lv > 0.01:
+                continue
+            op, oq = np.dot(p - a, n), np.dot(q - a, n)
+            if not (-PLATE_INSET_MAX <= min(op, oq) and max(op, oq) <= 0.01):
+                continue
+            if not 0.0 < np.dot(0.5 * (p + q) - a, d) < ln:
+                continue
+            if best is None or lv > best[0]:
+                best = (lv, p, q)
+        if best is None:
+            return None
+        edge.append((best[1], best[2]))
+    quad = [line_intersect(edge[(k - 1) % 4], edge[k]) for k in range(4)]
+    if any(c is None for c in quad):
+        return None
+    return np.array(quad), edge
+
+
+def foot(line, x):
+    """Foot of x on the infinite line (p, q)."""
+    p, q = line
+    d = (q - p) / np.linalg.norm(q - p)
+    return p + np.dot(x - p, d) * d
+
+
+def crossings(T, k, dense, margin=3.0):
+    """Where the closed dense outline crosses the line of T's side k, as distances along the
+    side, more than `margin` from its ends (a bridge's two sides)."""
+    a, d, n, ln = side_frame(T, k)
+    out = []
+    for P in dense:
+        Q = np.roll(P, -1, 0)
+        op, oq = (P - a) @ n, (Q - a) @ n
+        for i in np.nonzero(op * oq < 0)[0]:
+            x = P[i] + (op[i] / (op[i] - oq[i])) * (Q[i] - P[i])
+            u = float(np.dot(x - a, d))
+            if margin < u < ln - margin:
+                out.append(u)
+    return sorted(out)
+
+
+def plate_frame(Q):
+    """A 3D planar quad: centre, unit normal, in-plane axes and its 2D corners."""
+    c = Q.mean(0)
+    n = np.cross(Q[2] - Q[0], Q[3] - Q[1])
+    n /= np.linalg.norm(n)
+    u = Q[1] - Q[0]
+    u -= n * np.dot(u, n)
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    return c, n, u, v, np.array([[np.dot(p - c, u), np.dot(p - c, v)] for p in Q])
+
+
+def signed_depth(poly, p):
+    """Distance from p to the outline of the convex polygon poly: positive inside, negative
+    outside."""
+    dmin = math.inf
+    for i in range(len(poly)):
+        a, b = poly[i], poly[(i + 1) % len(poly)]
+        ab = b - a
+        t = min(1.0, max(0.0, float(np.dot(p - a, ab) / np.dot(ab, ab))))
+        dmin = min(dmin, float(np.linalg.norm(p - (a + t * ab))))
+    return dmin if point_in_convex(poly, p) else -dmin
+
+
+def plate_gap(x, pf, t):
+    """From x to the plate `pf` (plate_frame) thickened to t either side of its mid-plane:
+    zero edge to edge in one plane, and for an edge resting on the face."""
+    c, n, u, v, q2 = pf
+    h = float(np.dot(x - c, n))
+    sd = signed_depth(q2, np.array([np.dot(x - c, u), np.dot(x - c, v)]))
+    return math.hypot(max(0.0, -sd), max(0.0, abs(h) - t))
+
+
+def segment_reach(x0, x1, pf, t):
+    """How deep the segment x0 x1 reaches into the plate `pf` (plate_frame): the largest,
+    over its points, of the smaller of the depth inside the outline and the depth inside the
+    slab t either side of the mid-plane; 0 when it stays clear.  Along the segment each of
+    those is linear, so the largest of their smallest lies at an end or at a crossing of
+    two of them: all are tried."""
+    c, n, u, v, q2 = pf
+    area = sum(q2[i][0] * q2[(i + 1) % 4][1] - q2[(i + 1) % 4][0] * q2[i][1] for i in range(4))
+    lines = []   # (value at x0, change from x0 to x1)
+    p0 = np.array([np.dot(x0 - c, u), np.dot(x0 - c, v)])
+    p1 = np.array([np.dot(x1 - c, u), np.dot(x1 - c, v)])
+    for i in range(4):
+        e = q2[(i + 1) % 4] - q2[i]
+        inward = np.array([-e[1], e[0]]) / np.linalg.norm(e) * (1.0 if area > 0 else -1.0)
+        lines.append((float(np.dot(p0 - q2[i], inward)), float(np.dot(p1 - p0, inward))))
+    h0, h1 = float(np.dot(x0 - c, n)), float(np.dot(x1 - c, n))
+    lines += [(t - h0, -(h1 - h0)), (t + h0, h1 - h0)]
+
+    def at(s):
+        return min(a + b * s for a, b in lines)
+    cand = [0.0, 1.0]
+    for i in range(len(lines)):
+        for j in range(i + 1, len(lines)):
+            slope = lines[i][1] - lines[j][1]
+            if abs(slope) > 1e-15:
+                s_ = (lines[j][0] - lines[i][0]) / slope
+                if 0.0 <= s_ <= 1.0:
+                    cand.append(s_)
+    return max(0.0, max(at(s_) for s_ in cand))
+
+
+def turn(Ra, Rb, d):
+    """Bend (in plate a's plane) and twist (out of it), radians, between the joint direction
+    d (flat) carried by rotation Ra and by Rb; a pure fold about d gives (0, 0)."""
+    e = Ra[:, :2] @ d
+    g = Rb[:, :2] @ d
+    n = Ra[:, 2]
+    bend = math.atan2(float(np.dot(np.cross(n, e), g)), float(np.dot(e, g)))
+    twist = math.asin(max(-1.0, min(1.0, float(np.dot(n, g)))))
+    return bend, twist
+
+
 # ----------------------------------------------------------------- main
 
 class InputError(Exception):
@@ -328,30 +487,34 @@ def load_inputs(d):
     return frame, strips
 
 
-def read_slots(path):
-    """Closed LWPOLYLINEs on layer INSIDE as (n,3) arrays x, y, bulge."""
+def read_cut(path):
+    """Closed LWPOLYLINEs (x, y, bulge arrays) of the strip DXF: (INSIDE, OUTSIDE)."""
     try:
         import ezdxf
     except ImportError:
         raise InputError("ezdxf is required to read %s" % path)
-    slots = []
+    layers = {"INSIDE": [], "OUTSIDE": []}
+
+    def keep(e):
+        lay = e.dxf.layer.upper()
+        if lay in layers:
+            layers[lay].append(np.array(list(e.get_points("xyb")), float))
     try:
         from ezdxf.addons import iterdxf  # fast single pass, modelspace only
         with open(path, "rb") as fh:
             for e in iterdxf.single_pass_modelspace(fh, types=["LWPOLYLINE"]):
-                if e.dxf.layer.upper() == "INSIDE":
-                    slots.append(np.array(list(e.get_points("xyb")), float))
-        return slots
+                keep(e)
+        return layers["INSIDE"], layers["OUTSIDE"]
     except Exception:  # noqa  -- fall back to the full reader
-        slots = []
+        layers = {"INSIDE": [], "OUTSIDE": []}
     try:
         doc = ezdxf.readfile(path)
     except Exception as e:  # noqa
         raise InputError("cannot read %s: %s" % (path, e))
     for e in doc.modelspace():
-        if e.dxftype() == "LWPOLYLINE" and e.dxf.layer.upper() == "INSIDE":
-            slots.append(np.array(list(e.get_points("xyb")), float))
-    return slots
+        if e.dxftype() == "LWPOLYLINE":
+            keep(e)
+    return layers["INSIDE"], layers["OUTSIDE"]
 
 
 def main(argv=None):
@@ -368,6 +531,9 @@ def main(argv=None):
         links = frame["links"]
         cut = frame["params"]["cut"]
         neck_w, leg_w = float(cut["neck"]), float(cut["leg"])
+        thickness = float(frame["params"]["thickness"])
+        jl = frame["params"]["joint_limits"]
+        bend_lim, twist_lim = float(jl["bend"]), float(jl["twist"])
     except InputError as e:
         print("fold_check: %s" % e, file=sys.stderr)
         return 2
@@ -387,6 +553,9 @@ def main(argv=None):
     hub_pins = [None] * nu   # flat, 4x2
     rim_pins = [None] * nu
     plate_flat = [None] * nu  # hub plate corners, flat
+    cut_plate = [None] * nu   # primary plate as the outline cuts it: flat quad, side lines
+    strip_of = [None] * nu
+    bridges = []              # (where, span error mm, bend rad, twist rad)
     problems = []            # (check, where, message)
     kabsch_max = 0.0
     inner_violations = 0
@@ -400,7 +569,7 @@ def main(argv=None):
     for st in strip_list:
         path = os.path.join(a.dir, "strips", "%s.dxf" % st["id"])
         try:
-            slots = read_slots(path)
+            slots, outside = read_cut(path)
         except InputError as e:
             print("fold_check: %s" % e, file=sys.stderr)
             return 2
@@ -501,6 +670,44 @@ def main(argv=None):
                 else:
                     plate_flat[ui] = np.array(pc)
 
+        # ---- primary plates as cut, and the bridges that join them (checks 4 and 5)
+        out_dense, out_lines = [], []
+        for o in outside:
+            fd, ln, _ = flatten_lwpolyline(o, step)
+            out_dense.append(fd)
+            out_lines.extend(ln)
+        if not outside:
+            problems.append(("plates", st["id"], "no OUTSIDE outline in the DXF"))
+        for ui, T in tiles:
+            strip_of[ui] = st["id"]
+            cut_plate[ui] = plate_as_cut(T, out_lines)
+            if cut_plate[ui] is None:
+                problems.append(("plates", uid[ui], "primary plate edges not found in the outline"))
+        flat_of = dict(tiles)
+        for pin in st.get("pins", []):
+            fa, fb = pin["units"]
+            where = "%s~%s" % (uid[fa], uid[fb])
+            if fa not in flat_of or fb not in flat_of or cut_plate[fa] is None or cut_plate[fb] is None:
+                problems.append(("bridges", where, "bridged units not both in strip %s" % st["id"]))
+                continue
+            A, B = flat_of[fa], flat_of[fb]
+            ka = int(np.argmin([np.linalg.norm(0.5 * (A[k] + A[(k + 1) % 4]) - B.mean(0)) for k in range(4)]))
+            kb = int(np.argmin([np.linalg.norm(0.5 * (B[k] + B[(k + 1) % 4]) - A.mean(0)) for k in range(4)]))
+            xs = crossings(A, ka, out_dense)
+            if len(xs) != 2:
+                problems.append(("bridges", where, "%d outline crossings of the joint (a bridge has 2)" % len(xs)))
+                continue
+            a0, d, _, _ = side_frame(A, ka)
+            span = 0.0
+            for u in xs:
+                x = a0 + u * d
+                pa = foot(cut_plate[fa][1][ka], x)
+                pb = foot(cut_plate[fb][1][kb], x)
+                span = max(span, abs(np.linalg.norm(apply(pri_mot[fa], pa) - apply(pri_mot[fb], pb))
+                                     - np.linalg.norm(pa - pb)))
+            bend, twist = turn(pri_mot[fa][0], pri_mot[fb][0], d)
+            bridges.append((where, span, bend, twist))
+
     # ---------------------------------------------------------- check 1
     legs_checked = 0
     leg_err = (0.0, None)
@@ -564,8 +771,11 @@ def main(argv=None):
     lap_fail, claim_fail = [], []
     slot_mismatch = 0
     gap_max = (-float("inf"), None)
-    crossings = []
+    through_links = []
     gap_claim_err = 0.0
+    welds = []               # (where, gap at the joint point, |gap - joint.gap|)
+    reach = (0.0, None)      # deepest reach of one plate into another, between strips
+    reach_fail = []
     for li, lk in enumerate(links):
         f, g = lk["units"]
         where = "%s~%s" % (uid[f], uid[g])
@@ -612,12 +822,49 @@ def main(argv=None):
             or seg_pierces_quad(Pf[sa], Pf[(sa + 1) % 4], Pg)
         gap = -dd if through else dd
         if through:
-            crossings.append(where)
+            through_links.append(where)
         claimed = float(lk.get("primary_gap", float("nan")))
         if claimed == claimed:
             gap_claim_err = max(gap_claim_err, abs(dd - claimed))
         if gap_max[1] is None or gap > gap_max[0]:
             gap_max = (gap, where)
+        # ---- checks 5 and 6: plates of neighbouring strips, as cut, thickness included
+        if strip_of[f] == strip_of[g] or cut_plate[f] is None or cut_plate[g] is None:
+            continue
+        qf = np.array([apply(pri_mot[f], p) for p in cut_plate[f][0]])
+        qg = np.array([apply(pri_mot[g], p) for p in cut_plate[g][0]])
+        pf_, pg_ = plate_frame(qf), plate_frame(qg)
+        # welded at the joint point frame.json gives (links[].joint.along on f's facing
+        # side), else where the facing edges come closest
+        jt = lk.get("joint") or {}
+        line = cut_plate[f][1][sa]
+        T = flat_tile[f]
+        if "along" in jt:
+            s_ = float(jt["along"][0])
+            w2 = foot(line, T[sa] + s_ * (T[(sa + 1) % 4] - T[sa]))
+            wg = plate_gap(apply(pri_mot[f], w2), pg_, thickness)
+        else:
+            wg = min(plate_gap(x, pg_, thickness) for x in np.linspace(qf[sa], qf[(sa + 1) % 4], 65))
+        ce = abs(wg - float(jt["gap"])) if "gap" in jt else float("inf")
+        welds.append((where, wg, ce))
+        # no plate reaches into its neighbour: the facing edge of each, all along
+        deep = max(segment_reach(qg[sb], qg[(sb + 1) % 4], pf_, thickness),
+                   segment_reach(qf[sa], qf[(sa + 1) % 4], pg_, thickness))
+        if reach[1] is None or deep > reach[0]:
+            reach = (deep, where)
+        if deep > REACH_TOL:
+            reach_fail.append(where)
+
+    # ---------------------------------------------------------- check 4
+    span_w = max(bridges, key=lambda b: b[1], default=(None, 0.0, 0.0, 0.0))
+    bend_w = max(bridges, key=lambda b: abs(b[2]), default=(None, 0.0, 0.0, 0.0))
+    twist_w = max(bridges, key=lambda b: abs(b[3]), default=(None, 0.0, 0.0, 0.0))
+    bridge_fail = [b[0] for b in bridges
+                   if b[1] > BRIDGE_TOL or abs(b[2]) > bend_lim or abs(b[3]) > twist_lim]
+    weld_w = max(welds, key=lambda w: w[1], default=(None, 0.0, 0.0))
+    weld_claim = max(welds, key=lambda w: w[2], default=(None, 0.0, 0.0))
+    weld_fail = [w[0] for w in welds if w[1] > WELD_TOL]
+    n_pins = sum(len(st.get("pins", [])) for st in strip_list)
 
     # ---------------------------------------------------------- report
     struct = [p for p in problems]
@@ -634,6 +881,18 @@ def main(argv=None):
         not lap_fail and laps_checked > 0)
     row("hub lap vs claim (mm)", "%.3g" % lap_claim[0], "<= %g" % LAP_CLAIM_TOL, lap_claim[1] or "-",
         not claim_fail and laps_checked > 0)
+    row("bridge span, folded - flat (mm)", "%.3g" % span_w[1], "<= %g" % BRIDGE_TOL, span_w[0] or "-",
+        not [b for b in bridges if b[1] > BRIDGE_TOL] and len(bridges) == n_pins)
+    row("bridge bent in its plane (deg)", "%.3g" % math.degrees(abs(bend_w[2])),
+        "<= %.3g" % math.degrees(bend_lim), bend_w[0] or "-", abs(bend_w[2]) <= bend_lim)
+    row("bridge twisted (deg)", "%.3g" % math.degrees(abs(twist_w[3])),
+        "<= %.3g" % math.degrees(twist_lim), twist_w[0] or "-", abs(twist_w[3]) <= twist_lim)
+    row("weld: plates of two strips apart (mm)", "%.3g" % weld_w[1], "<= %g" % WELD_TOL, weld_w[0] or "-",
+        not weld_fail)
+    row("weld gap vs links[].joint.gap (mm)", "%.3g" % weld_claim[2], "<= %g" % LAP_CLAIM_TOL,
+        weld_claim[0] or "-", weld_claim[2] <= LAP_CLAIM_TOL)
+    row("plates of two strips into each other (mm)", "%.3g" % reach[0], "<= %g" % REACH_TOL, reach[1] or "-",
+        not reach_fail)
     row("DXF topology (slots/necks)", "%d problems" % len(struct), "0",
         (struct[0][1] if struct else "-"), not struct)
     row("kabsch residual (mm)", "%.3g" % kabsch_max, "<= %g" % KABSCH_TOL, "-", kabsch_max <= KABSCH_TOL)
@@ -652,10 +911,11 @@ def main(argv=None):
           "facing corners differ from links[].slots: %d" % (plate_dev[0], plate_dev[1], slot_mismatch))
     print("info: largest primary gap %.3f mm (%s) (vs links[].primary_gap: max diff %.3g mm); "
           "links with facing primary sides passing through each other: %d%s"
-          % (gap_max[0], gap_max[1], gap_claim_err, len(crossings),
-                                                 (" (" + ", ".join(crossings[:5]) + ")") if crossings else ""))
+          % (gap_max[0], gap_max[1], gap_claim_err, len(through_links),
+             (" (" + ", ".join(through_links[:5]) + ")") if through_links else ""))
     for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
-                      ("hub lap", lap_fail), ("lap claim", claim_fail)):
+                      ("hub lap", lap_fail), ("lap claim", claim_fail), ("bridge", bridge_fail),
+                      ("weld", weld_fail), ("plates into each other", reach_fail)):
         if lst:
             print("FAIL %s: %d: %s%s" % (name, len(lst), ", ".join(lst[:10]), " ..." if len(lst) > 10 else ""))
     for p in struct[:10]:
@@ -675,13 +935,26 @@ def main(argv=None):
             "leg_length_claim_error_max": tool_len_err,
             "kabsch_residual_max": kabsch_max,
             "primary_gap_max": gap_max[0] if gap_max[1] else None,
-            "primary_crossings": len(crossings),
+            "primary_crossings": len(through_links),
             "primary_gap_claim_error_max": gap_claim_err,
+            "bridges_checked": len(bridges),
+            "bridges_in_strips": n_pins,
+            "bridge_span_max": span_w[1],
+            "bridge_bend_max_deg": math.degrees(abs(bend_w[2])),
+            "bridge_twist_max_deg": math.degrees(abs(twist_w[3])),
+            "bridge_bend_limit_deg": math.degrees(bend_lim),
+            "bridge_twist_limit_deg": math.degrees(twist_lim),
+            "welds_checked": len(welds),
+            "weld_gap_max": weld_w[1],
+            "weld_claim_error_max": weld_claim[2],
+            "reach_max": reach[0],
             "problems": ["%s: %s: %s" % p for p in struct],
-            "failing": {"leg": leg_fail, "pin": pin_fail, "lap": lap_fail, "lap_claim": claim_fail},
+            "failing": {"leg": leg_fail, "pin": pin_fail, "lap": lap_fail, "lap_claim": claim_fail,
+                        "bridge": bridge_fail, "weld": weld_fail, "reach": reach_fail},
             "ok": bool(ok),
             "worst": {"leg_error": leg_err[1], "pin_offset": pin_off[1],
-                      "lap_min": lap_min[1], "lap_claim_error": lap_claim[1]},
+                      "lap_min": lap_min[1], "lap_claim_error": lap_claim[1],
+                      "bridge_span": span_w[0], "weld_gap": weld_w[0], "reach": reach[1]},
         }
         with open(a.json, "w") as fh:
             json.dump(out, fh, indent=1)

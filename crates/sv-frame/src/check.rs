@@ -3,7 +3,7 @@
 use sv_geom::{segment_closest, Matrix3, Point3, Real, Vector3};
 
 use crate::solve::hub_overlap;
-use crate::{FrameFile, Hub, QuadMesh};
+use crate::{FrameFile, Hub, JointKind, QuadMesh};
 
 /// Tolerances of [`check_frame`].
 #[derive(Clone, Debug, PartialEq)]
@@ -398,6 +398,18 @@ fn check_joints(
     let thickness = frame.params.thickness.unwrap_or(0.0);
     let mut claims = Worst::new("joint records = the plates in the file (mm, rad)", 1e-6);
     let mut unrecorded = Worst::new("links without a joint record", 0.0);
+    // the plates as cut: half the joint slot off every side a bridge joins
+    let half = frame.params.cut.map_or(0.0, |c| c.joint / 2.0);
+    let mut insets = vec![[0.0; 4]; frame.units.len()];
+    for l in &frame.links {
+        if l.joint.is_some_and(|j| j.kind == JointKind::Bridge) {
+            for u in l.units {
+                if let (Some(k), Some(inset)) = (slot(u, l.edge[0], l.edge[1]), insets.get_mut(u)) {
+                    inset[k] = half;
+                }
+            }
+        }
+    }
     for (li, l) in frame.links.iter().enumerate() {
         let [a, b] = l.units;
         let at = || {
@@ -417,7 +429,14 @@ fn check_joints(
             claims.see(Real::INFINITY, at);
             continue;
         };
-        let r = crate::joint::joint_record(pa, k, pb, m, j.along[0], j.kind, thickness);
+        let r = crate::joint::joint_record(
+            [pa, pb],
+            [insets[a], insets[b]],
+            [k, m],
+            j.along[0],
+            j.kind,
+            thickness,
+        );
         claims.see(
             [
                 r.gap - j.gap,

@@ -40,29 +40,95 @@ pub fn edge_to_plate(_a: &[Point3; 4], w: &Point3, b: &[Point3; 4], thickness: R
     nearest_on_plate(b, 2.0 * thickness, w) - w
 }
 
-/// Points at which [`reach_into`] measures a segment.
+/// Points at which [`reach_profile`] samples a segment.
 pub const REACH_SAMPLES: usize = 17;
 
-/// How far each of [`REACH_SAMPLES`] points of the segment `p q` (from `p` to `q`) reaches
-/// into plate `a` (see [`reach_into`]).
+/// Rows of [`reach_profile`]: the samples and the deepest point.
+pub const REACH_ROWS: usize = REACH_SAMPLES + 1;
+
+/// Along the segment `p q`, the six lines (value at `p`, change from `p` to `q`) whose
+/// smallest is how deep a point lies in plate `a`: its depth inside each of `a`'s four
+/// sides (seen along `a`'s normal) and its clearance `thickness -+ height` from `a`'s
+/// mid-plane. `None` for a degenerate plate.
+fn reach_lines(
+    a: &[Point3; 4],
+    p: &Point3,
+    q: &Point3,
+    thickness: Real,
+) -> Option<[(Real, Real); 6]> {
+    let n = plate_normal(a)?;
+    let mut lines = [(0.0, 0.0); 6];
+    for (i, line) in lines.iter_mut().take(4).enumerate() {
+        let inward = n.cross(&(a[(i + 1) % 4] - a[i])).normalize();
+        *line = (inward.dot(&(p - a[i])), inward.dot(&(q - p)));
+    }
+    let (h, dh) = (n.dot(&(p - a[0])), n.dot(&(q - p)));
+    lines[4] = (thickness - h, -dh);
+    lines[5] = (thickness + h, dh);
+    Some(lines)
+}
+
+/// `(depth inside the outline, clearance inside the slab)` at `s` along the segment.
+fn reach_at(lines: &[(Real, Real); 6], s: Real) -> (Real, Real) {
+    let min = |l: &[(Real, Real)]| {
+        l.iter()
+            .map(|(v, d)| v + d * s)
+            .fold(Real::INFINITY, Real::min)
+    };
+    (min(&lines[..4]), min(&lines[4..]))
+}
+
+/// Where along `p q` (0 to 1) the segment reaches deepest into plate `a`, and how deep
+/// (see [`reach_into`]).
+fn reach_peak(lines: &[(Real, Real); 6]) -> (Real, Real) {
+    let value = |s: Real| {
+        let (depth, clear) = reach_at(lines, s);
+        depth.min(clear)
+    };
+    let mut best = (0.0, value(0.0));
+    let mut consider = |s: Real| {
+        let v = value(s);
+        if v > best.1 {
+            best = (s, v);
+        }
+    };
+    consider(1.0);
+    for i in 0..6 {
+        for j in i + 1..6 {
+            let slope = lines[i].1 - lines[j].1;
+            if slope.abs() > 1e-15 {
+                let s = (lines[j].0 - lines[i].0) / slope;
+                if (0.0..=1.0).contains(&s) {
+                    consider(s);
+                }
+            }
+        }
+    }
+    (best.0, best.1.max(0.0))
+}
+
+/// How deep `p q` reaches into plate `a` (see [`reach_into`]) at [`REACH_SAMPLES`] points
+/// and at its deepest: rows for the solve.
 pub fn reach_profile(
     a: &[Point3; 4],
     p: &Point3,
     q: &Point3,
     thickness: Real,
-) -> [Real; REACH_SAMPLES] {
-    let Some(n) = plate_normal(a) else {
-        return [0.0; REACH_SAMPLES];
+) -> [Real; REACH_ROWS] {
+    let Some(lines) = reach_lines(a, p, q, thickness) else {
+        return [0.0; REACH_ROWS];
     };
-    let inward: [Vector3; 4] =
-        std::array::from_fn(|i| n.cross(&(a[(i + 1) % 4] - a[i])).normalize());
-    std::array::from_fn(|s| {
-        let x = p + (q - p) * (s as Real / (REACH_SAMPLES - 1) as Real);
-        let depth = (0..4)
-            .map(|i| inward[i].dot(&(x - a[i])))
-            .fold(Real::INFINITY, Real::min);
-        let clear = thickness - n.dot(&(x - a[0])).abs();
+    let row = |s: Real| {
+        let (depth, clear) = reach_at(&lines, s);
         depth.min(clear).max(0.0)
+    };
+    let peak = reach_peak(&lines).0;
+    std::array::from_fn(|i| {
+        if i < REACH_SAMPLES {
+            row(i as Real / (REACH_SAMPLES - 1) as Real)
+        } else {
+            row(peak)
+        }
     })
 }
 
@@ -70,12 +136,41 @@ pub fn reach_profile(
 /// `thickness` on its mid-plane): the largest, over points of the segment, of how deep the
 /// point lies inside `a`'s outline (seen along `a`'s normal) while closer to `a`'s
 /// mid-plane than `thickness` (mm, 0 when it stays clear). A segment whose plate touches
-/// `a` edge to edge, or passes above or below it, reaches 0; it is continuous in every
-/// point, so the solve can push it to 0. Measured at [`REACH_SAMPLES`] points.
+/// `a` edge to edge, or passes above or below it, reaches 0.
+///
+/// Exact: along the segment the depth below each of `a`'s four sides and the clearance
+/// `thickness -+ height` are linear, so their smallest is concave and piecewise linear, and
+/// its largest value lies at an end of the segment or where two of the six lines cross.
 pub fn reach_into(a: &[Point3; 4], p: &Point3, q: &Point3, thickness: Real) -> Real {
-    reach_profile(a, p, q, thickness)
-        .into_iter()
-        .fold(0.0, Real::max)
+    reach_lines(a, p, q, thickness).map_or(0.0, |l| reach_peak(&l).1)
+}
+
+/// A primary plate as cut from its (expanded) tile: side `k` moved into the tile's plane by
+/// `inset[k]` (half the joint slot where a bridge joins the strip's next unit there, 0 where
+/// the plate reaches the tile's side; `docs/fabrication.md` 3). The corner fillets are left
+/// out (they take at most `fillet_radius (sqrt 2 - 1)` off a right corner).
+pub fn plate_as_cut(tile: &[Point3; 4], inset: [Real; 4]) -> [Point3; 4] {
+    let Some(n) = plate_normal(tile) else {
+        return *tile;
+    };
+    if inset == [0.0; 4] {
+        return *tile;
+    }
+    let inward: [Vector3; 4] =
+        std::array::from_fn(|i| n.cross(&(tile[(i + 1) % 4] - tile[i])).normalize());
+    std::array::from_fn(|k| {
+        // corner k joins side k - 1 and side k: moved in by both insets
+        let h = (k + 3) % 4;
+        let (u, v) = (inward[h], inward[k]);
+        let c = u.dot(&v);
+        let det = 1.0 - c * c;
+        if det < 1e-12 {
+            return tile[k] + u * inset[h];
+        }
+        let along_u = (inset[h] - c * inset[k]) / det;
+        let along_v = (inset[k] - c * inset[h]) / det;
+        tile[k] + u * along_u + v * along_v
+    })
 }
 
 /// The turn of a hinge from plate `a`'s side `k` to plate `b`'s side `m` (the two facing
@@ -138,6 +233,70 @@ mod tests {
             ),
             0.0
         );
+    }
+
+    #[test]
+    fn the_reach_is_the_exact_largest_not_the_largest_sample() {
+        // a 100 x 100 plate; a long segment in its plane that cuts across its corner
+        // (100, 0): 1 mm deep at (99, 1), between the samples
+        let a = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(100.0, 0.0, 0.0),
+            Point3::new(100.0, 100.0, 0.0),
+            Point3::new(0.0, 100.0, 0.0),
+        ];
+        let (p, q) = (
+            Point3::new(-103.0, -201.0, 0.0),
+            Point3::new(101.0, 3.0, 0.0),
+        );
+        let exact = reach_into(&a, &p, &q, 2.5);
+        assert!((exact - 1.0).abs() < 1e-12, "{exact}");
+        // 17 even samples miss it; the solve's rows hold the peak too
+        let sampled = (0..REACH_SAMPLES)
+            .map(|i| {
+                let x = p + (q - p) * (i as Real / (REACH_SAMPLES - 1) as Real);
+                reach_into(&a, &x, &x, 2.5)
+            })
+            .fold(0.0, Real::max);
+        assert!(sampled < 1.0, "the samples miss the peak: {sampled}");
+        let rows = reach_profile(&a, &p, &q, 2.5);
+        assert!((rows[REACH_SAMPLES] - 1.0).abs() < 1e-12, "{rows:?}");
+        // brute force agrees
+        let brute = (0..=100_000)
+            .map(|i| {
+                let x = p + (q - p) * (i as Real / 100_000.0);
+                reach_into(&a, &x, &x, 2.5)
+            })
+            .fold(0.0, Real::max);
+        assert!((brute - exact).abs() < 1e-3, "{brute} {exact}");
+    }
+
+    #[test]
+    fn a_plate_as_cut_is_its_tile_less_the_insets() {
+        // a rhombus with 60 degree corners, inset 2 on side 0 and 1 on side 2
+        let (s, c) = 60f64.to_radians().sin_cos();
+        let tile = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(10.0, 0.0, 0.0),
+            Point3::new(10.0 + 10.0 * c, 10.0 * s, 0.0),
+            Point3::new(10.0 * c, 10.0 * s, 0.0),
+        ];
+        let cut = plate_as_cut(&tile, [2.0, 0.0, 1.0, 0.0]);
+        // sides 1 and 3 stay on their lines; sides 0 and 2 moved in by 2 and 1
+        let dist = |p: &Point3, k: usize| {
+            let n = plate_normal(&tile).unwrap();
+            n.cross(&(tile[(k + 1) % 4] - tile[k]))
+                .normalize()
+                .dot(&(p - tile[k]))
+        };
+        for (k, want) in [(0, 2.0), (1, 0.0), (2, 1.0), (3, 0.0)] {
+            assert!((dist(&cut[k], k) - want).abs() < 1e-12, "side {k}");
+            assert!(
+                (dist(&cut[(k + 1) % 4], k) - want).abs() < 1e-12,
+                "side {k}"
+            );
+        }
+        assert_eq!(plate_as_cut(&tile, [0.0; 4]), tile);
     }
 
     #[test]

@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use sv_frame::plates::{edge_to_plate, hinge_turn, reach_into};
+use sv_frame::plates::{edge_to_plate, hinge_turn, plate_as_cut, reach_into};
 use sv_frame::{CheckReport, CheckRow, FrameFile};
 use sv_geom::{planar, rigid_fit, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
 use sv_unit::UnitLayout;
@@ -176,15 +176,31 @@ fn narrowest_web(slots: &[Vec<[Real; 2]>], near: Point2, radius: Real) -> Option
     best
 }
 
+/// How far unit `u`'s plate is cut back from each side of its tile: half the joint slot
+/// `joint` where one of the strip's bridges joins it.
+fn bridged_insets(strip: &StripRecord, u: usize, joint: Real) -> [Real; 4] {
+    let mut inset = [0.0; 4];
+    for pin in &strip.pins {
+        for (unit, side) in pin.units.into_iter().zip(pin.sides) {
+            if unit == u {
+                inset[side] = joint / 2.0;
+            }
+        }
+    }
+    inset
+}
+
 /// One unit of a strip, flat and folded.
 struct Folded {
     /// Flat (strip frame) to world, for the primary plate.
     primary: Isometry3,
     /// The hub plate as cut, in the world.
     hub_plate: [Point3; 4],
-    /// The primary tile (the plate as cut reaches its sides where no bridge is), in the
-    /// world.
+    /// The primary tile, in the world.
     tile: [Point3; 4],
+    /// The primary plate as cut: the tile less half the joint slot where a bridge joins
+    /// (the plate reaches the tile's other sides), in the world.
+    plate: [Point3; 4],
 }
 
 /// Fold-check a build: `strips` cut from `frame`. Rows: necks where frame.json pins them,
@@ -268,23 +284,24 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         laps.see(lap, at);
         claims.see((lap - link.hub_overlap).abs(), at);
         if strip_of.get(&a) != strip_of.get(&b) {
-            // the plates of two strips meet at their tiles' sides (the plate as cut reaches
-            // the tile's side where no bridge is)
-            let (ta, tb) = (&fa.tile, &fb.tile);
-            let depth = reach_into(ta, &tb[m], &tb[(m + 1) % 4], thickness).max(reach_into(
-                tb,
-                &ta[k],
-                &ta[(k + 1) % 4],
+            // the plates of two strips meet where their tiles' sides do, the plates as cut
+            // shortened at their ends where a bridge joins
+            let (pa, pb) = (&fa.plate, &fb.plate);
+            let depth = reach_into(pa, &pb[m], &pb[(m + 1) % 4], thickness).max(reach_into(
+                pb,
+                &pa[k],
+                &pa[(k + 1) % 4],
                 thickness,
             ));
             collisions.see(depth, at);
             // welded where the frame says, else where the sides come closest
+            let (ta, tb) = (&fa.tile, &fb.tile);
             let s = link.joint.map_or_else(
                 || segment_closest(&ta[k], &ta[(k + 1) % 4], &tb[m], &tb[(m + 1) % 4]).s,
                 |j| j.along[0],
             );
             let w = ta[k] + (ta[(k + 1) % 4] - ta[k]) * s;
-            welds.see(edge_to_plate(ta, &w, tb, thickness).norm(), at);
+            welds.see(edge_to_plate(pa, &w, pb, thickness).norm(), at);
         }
     }
     let mut span = Row::max("bridge length folded - flat (mm)", limits.bridge_span);
@@ -417,6 +434,10 @@ fn fold_unit(
             primary,
             hub_plate: layout.hub.map(|p| hub * lift(&p)),
             tile: flat.map(|p| primary * lift(&p)),
+            plate: plate_as_cut(
+                &flat.map(|p| primary * lift(&p)),
+                bridged_insets(strip, u, widths.joint),
+            ),
         },
         Necks {
             pin_offsets,

@@ -32,7 +32,7 @@ use crate::{
 };
 use piece::{Join, Piece};
 pub(crate) use problem::joint_record;
-use problem::{edge_ratio, Problem};
+use problem::{edge_ratio, side_links, Problem};
 use unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints};
 
 /// The target surface the hub mesh stays on.
@@ -97,7 +97,7 @@ pub struct PieceLength {
 impl Default for JointOptions {
     fn default() -> Self {
         Self {
-            max_iterations: 200,
+            max_iterations: 250,
             closeness: 0.05,
             min_overlap: 0.0,
             overlap: None,
@@ -367,6 +367,7 @@ pub fn close_joints(
         faces: &mesh.faces,
         links: &solved.links,
         bridges: bridges.to_vec(),
+        side_links: side_links(&solved.links, nf),
         anchors: anchors_at(&{
             let mut x = vec![0.0; 3 * nv];
             for (v, p) in mesh.vertices.iter().enumerate() {
@@ -666,6 +667,7 @@ mod tests {
             faces: &mesh.faces,
             links: &solved.links,
             bridges: bridges.clone(),
+            side_links: side_links(&solved.links, nf),
             anchors: anchors.clone(),
             corners: vec![false; nv],
             start: mesh

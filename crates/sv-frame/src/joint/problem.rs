@@ -9,7 +9,9 @@ use sv_geom::{segment_closest, Point3, Real, Vector3};
 use super::piece::Piece;
 use super::unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints, INPUTS};
 use super::{Anchor, JointFigures, JointOptions};
-use crate::plates::{edge_to_plate, hinge_turn, reach_into, reach_profile, REACH_SAMPLES};
+use crate::plates::{
+    edge_to_plate, hinge_turn, plate_as_cut, reach_into, reach_profile, REACH_ROWS,
+};
 use crate::solve::hub_overlap;
 use crate::GOAL_PLANARITY;
 use crate::{JointKind, JointRecord, Link};
@@ -99,8 +101,8 @@ impl Sink for Energy {
 
 /// Rows of a link's primary plates: the joint point's offset (3), its room on both sides
 /// (2), bend, twist, turn beyond the limits, and at a weld the reach of each side into the
-/// other plate at every sample.
-pub(super) const ROWS: usize = 8 + 2 * REACH_SAMPLES;
+/// other plate at every sample and at its deepest.
+pub(super) const ROWS: usize = 8 + 2 * REACH_ROWS;
 
 /// One link's rows over its columns (both units' inputs and its joint parameter), with
 /// their gradients along those columns.
@@ -152,6 +154,8 @@ pub(super) struct Problem<'a> {
     pub(super) faces: &'a [[usize; 4]],
     pub(super) links: &'a [Link],
     pub(super) bridges: Vec<bool>,
+    /// Per face and side: the link across it.
+    pub(super) side_links: Vec<[Option<usize>; 4]>,
     pub(super) anchors: Vec<Anchor>,
     /// Per vertex: a corner of the mesh (one face), held where it starts.
     pub(super) corners: Vec<bool>,
@@ -176,6 +180,17 @@ pub(super) struct Problem<'a> {
     /// A factor on the legs' weight: raised at the end, so that the legs hold to far below
     /// a micrometre with the joints where the solve put them.
     pub(super) legs: Real,
+}
+
+/// Per face and side: the link across it.
+pub(super) fn side_links(links: &[Link], faces: usize) -> Vec<[Option<usize>; 4]> {
+    let mut at = vec![[None; 4]; faces];
+    for (li, l) in links.iter().enumerate() {
+        for (f, k) in l.faces.into_iter().zip(l.slots) {
+            at[f][k] = Some(li);
+        }
+    }
+    at
 }
 
 /// One gradient row under construction: columns merged.
@@ -518,6 +533,7 @@ impl Problem<'_> {
         let width = o.bridge_width;
         let (bend_lim, twist_lim) = (MARGIN * o.limits.bend, MARGIN * o.limits.twist);
         let stiff = self.stiffness > 0.0;
+        let insets = [self.cut_inset(l.faces[0]), self.cut_inset(l.faces[1])];
         let measures = |p: &[Point3; 8], s: Real| -> [Real; ROWS] {
             let (a, b) = ([p[0], p[1], p[2], p[3]], [p[4], p[5], p[6], p[7]]);
             let fv = a[k1] - a[k];
@@ -530,8 +546,20 @@ impl Problem<'_> {
             // the two plates of a weld meet along
             let off = (w - b[m]) - gh * t;
             let flen = fv.norm();
-            let out_f = (room - s * flen).max(s * flen - (flen - room)).max(0.0);
-            let out_g = (room - t).max(t - (len - room)).max(0.0);
+            let fh = fv / flen;
+            // a weld's plates are cut back where their bridges join (their sides' ends
+            // move in): the joint point stays on both plates as cut
+            let (ac, bc) = if bridge {
+                (a, b)
+            } else {
+                (plate_as_cut(&a, insets[0]), plate_as_cut(&b, insets[1]))
+            };
+            let (f_lo, f_hi) = ((ac[k] - a[k]).dot(&fh), (a[k1] - ac[k1]).dot(&fh));
+            let (g_lo, g_hi) = ((bc[m] - b[m]).dot(&gh), (b[m1] - bc[m1]).dot(&gh));
+            let out_f = (room + f_lo - s * flen)
+                .max(s * flen - (flen - room - f_hi))
+                .max(0.0);
+            let out_g = (room + g_lo - t).max(t - (len - room - g_hi)).max(0.0);
             let (bend, twist) = hinge_turn(&a, k, &b, m);
             let beyond = |v: Real, lim: Real| (v.abs() - lim).max(0.0) * v.signum();
             let mut r = [0.0; ROWS];
@@ -551,8 +579,8 @@ impl Problem<'_> {
                     },
             ]);
             if !bridge && stiff {
-                r[8..8 + REACH_SAMPLES].copy_from_slice(&reach_profile(&a, &b[m], &b[m1], th));
-                r[8 + REACH_SAMPLES..].copy_from_slice(&reach_profile(&b, &a[k], &a[k1], th));
+                r[8..8 + REACH_ROWS].copy_from_slice(&reach_profile(&ac, &bc[m], &bc[m1], th));
+                r[8 + REACH_ROWS..].copy_from_slice(&reach_profile(&bc, &ac[k], &ac[k1], th));
             }
             r
         };
@@ -615,15 +643,25 @@ impl Problem<'_> {
             JointKind::Weld
         };
         let s = x[self.joint_columns[li]] / self.model.scale;
+        let [f, g] = l.faces;
         joint_record(
-            a,
-            l.slots[0],
-            b,
-            l.slots[1],
+            [a, b],
+            [self.cut_inset(f), self.cut_inset(g)],
+            l.slots,
             s,
             kind,
             self.options.thickness,
         )
+    }
+
+    /// How far face `f`'s primary plate is cut back from its tile's sides: half the joint
+    /// slot where a bridge joins the next unit of its strip.
+    pub(super) fn cut_inset(&self, f: usize) -> [Real; 4] {
+        let half = self.model.cut.map_or(0.0, |c| c.joint / 2.0);
+        self.side_links[f].map(|l| match l {
+            Some(li) if self.bridges[li] => half,
+            _ => 0.0,
+        })
     }
 
     /// Raise the weight of every joint outside its limits (margin included); false when
@@ -696,12 +734,14 @@ impl Problem<'_> {
     }
 }
 
-/// The joint at `s` along plate `a`'s side `k`, facing plate `b`'s side `m`, measured.
+/// The joint at `s` along tile `a`'s side `k`, facing tile `b`'s side `m`
+/// (`[a, b]`, `[k, m]`), measured; at a weld on the plates as cut (`plate_as_cut` with
+/// `insets`): the gap from the joint point to `b`'s plate, and how far either plate's side
+/// reaches into the other.
 pub(crate) fn joint_record(
-    a: &[Point3; 4],
-    k: usize,
-    b: &[Point3; 4],
-    m: usize,
+    [a, b]: [&[Point3; 4]; 2],
+    insets: [[Real; 4]; 2],
+    [k, m]: [usize; 2],
     s: Real,
     kind: JointKind,
     thickness: Real,
@@ -712,10 +752,14 @@ pub(crate) fn joint_record(
     let (bend, twist) = hinge_turn(a, k, b, m);
     let (gap, collision) = match kind {
         JointKind::Bridge => (on_b.distance, 0.0),
-        JointKind::Weld => (
-            edge_to_plate(a, &w, b, thickness).norm(),
-            reach_into(a, &b[m], &b[m1], thickness).max(reach_into(b, &a[k], &a[k1], thickness)),
-        ),
+        JointKind::Weld => {
+            let (ac, bc) = (plate_as_cut(a, insets[0]), plate_as_cut(b, insets[1]));
+            (
+                edge_to_plate(&ac, &w, &bc, thickness).norm(),
+                reach_into(&ac, &bc[m], &bc[m1], thickness)
+                    .max(reach_into(&bc, &ac[k], &ac[k1], thickness)),
+            )
+        }
     };
     JointRecord {
         kind,
