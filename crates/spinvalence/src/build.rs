@@ -677,6 +677,9 @@ fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
     let limits = frame.params.joint_limits.unwrap_or_default();
     let mut open: Vec<(f64, String)> = Vec::new();
     let (mut bridges, mut welds) = (0, 0);
+    // open welds whose plates turn in their plane more than a bridge may: edge to edge at
+    // an angle, one end opens while the other runs into its neighbour
+    let mut turned = (0, 0.0, String::new());
     let mut cut = Vec::new();
     for l in &frame.links {
         let Some(j) = l.joint else { continue };
@@ -693,6 +696,12 @@ fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
         match j.kind {
             sv_frame::JointKind::Bridge => bridges += 1,
             sv_frame::JointKind::Weld => welds += 1,
+        }
+        if j.kind == sv_frame::JointKind::Weld && j.bend.abs() > limits.bend {
+            turned.0 += 1;
+            if j.bend.abs() > turned.1 {
+                turned = (turned.0, j.bend.abs(), name.clone());
+            }
         }
         let (excess, measure) = limits.worst(&j);
         let what = match measure {
@@ -719,6 +728,17 @@ fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
             worst.join("; ")
         )
     };
+    if turned.0 > 0 {
+        text.push_str(&format!(
+            "; at {} open welds the plates meet at an angle in their plane of more than {:.1} deg \
+             (up to {:.1} deg at {}): edge to edge at such an angle one end opens while the \
+             other runs into its neighbour",
+            turned.0,
+            limits.bend.to_degrees(),
+            turned.1.to_degrees(),
+            turned.2
+        ));
+    }
     if !cut.is_empty() {
         // the tiles the solve stretched made a piece longer than the sheet: the strips
         // stage cut it at a joint closed as a bridge, welded on site instead
