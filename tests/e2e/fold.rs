@@ -116,7 +116,8 @@ fn worst(out: &crate::util::Output, name: &str) -> f64 {
         .unwrap_or_else(|| panic!("no figure in row {name}: {out:?}"))
 }
 
-/// `spinvalence check`'s worst hub lap, weld gap and reach are the fold check's, 0.1 mm.
+/// `spinvalence check`'s worst hub lap, weld gap, reach and hub stacking (how far the hub
+/// plates at a lap are from lying one on the other) are the fold check's, 0.1 mm.
 fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
     for (name, ours) in [
         ("hub lap as cut", "lap_min"),
@@ -125,6 +126,11 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
             "plates of neighbouring strips reach into each other",
             "reach_max",
         ),
+        (
+            "hub plates at a lap through each other",
+            "hub_stack_lift_max",
+        ),
+        ("hub plates at a lap, gap once stacked", "hub_stack_gap_max"),
     ] {
         let theirs = worst(checked, name);
         assert!(

@@ -456,6 +456,47 @@ def segment_reach(x0, x1, pf, t):
     return max(0.0, max(at(s_) for s_ in cand))
 
 
+def clip_convex(P, Q):
+    """Part of convex polygon P inside convex counter-clockwise polygon Q (2D)."""
+    out = [np.asarray(p, float) for p in P]
+    for i in range(len(Q)):
+        a, b = Q[i], Q[(i + 1) % len(Q)]
+        e = b - a
+        inp, out = out, []
+        if not inp:
+            break
+        for j in range(len(inp)):
+            c, d = inp[j], inp[(j + 1) % len(inp)]
+            sc = e[0] * (c[1] - a[1]) - e[1] * (c[0] - a[0])
+            sd = e[0] * (d[1] - a[1]) - e[1] * (d[0] - a[0])
+            if sc >= 0:
+                out.append(c)
+            if (sc >= 0) != (sd >= 0):
+                out.append(c + (d - c) * (sc / (sc - sd)))
+    return out
+
+
+def lap_heights(A, B):
+    """Hub plates A, B (3D quads) that lap: over their overlap seen along B's normal,
+    the lowest and highest height of A's mid-plane above B's; None without overlap."""
+    cb, nb, ub, vb, qb = plate_frame(B)
+    ca, na, _, _, _ = plate_frame(A)
+    if abs(np.dot(na, nb)) < 1e-6:
+        return None
+    area = sum(qb[i][0] * qb[(i + 1) % 4][1] - qb[(i + 1) % 4][0] * qb[i][1] for i in range(4))
+    if area < 0:
+        qb = qb[::-1]
+    qa = [np.array([np.dot(p - cb, ub), np.dot(p - cb, vb)]) for p in A]
+    ov = clip_convex(qa, qb)
+    if len(ov) < 3:
+        return None
+    hs = []
+    for x in ov:
+        X = cb + x[0] * ub + x[1] * vb
+        hs.append(float(np.dot(na, ca - X) / np.dot(na, nb)))
+    return min(hs), max(hs)
+
+
 def turn(Ra, Rb, d):
     """Bend (in plate a's plane) and twist (out of it), radians, between the joint direction
     d (flat) carried by rotation Ra and by Rb; a pure fold about d gives (0, 0)."""
@@ -769,6 +810,8 @@ def main(argv=None):
     lap_max = -float("inf")
     lap_claim = (0.0, None)
     lap_fail, claim_fail = [], []
+    stack_lift = (0.0, None)  # hub plates at a lap: the move that puts one on the other
+    stack_gap = (0.0, None)   # ... and the widest gap between them over the lap then
     slot_mismatch = 0
     gap_max = (-float("inf"), None)
     through_links = []
@@ -790,6 +833,13 @@ def main(argv=None):
             slot_mismatch += 1
         lap = float(np.dot(plate3[f][kf] - plate3[g][kg], e))
         laps_checked += 1
+        lh = lap_heights(plate3[f], plate3[g])
+        if lh is not None:
+            lift = max(0.0, min(thickness - lh[0], lh[1] + thickness))
+            if stack_lift[1] is None or lift > stack_lift[0]:
+                stack_lift = (lift, where)
+            if stack_gap[1] is None or lh[1] - lh[0] > stack_gap[0]:
+                stack_gap = (lh[1] - lh[0], where)
         if lap < lap_min[0]:
             lap_min = (lap, where)
         lap_max = max(lap_max, lap)
@@ -913,6 +963,9 @@ def main(argv=None):
           "links with facing primary sides passing through each other: %d%s"
           % (gap_max[0], gap_max[1], gap_claim_err, len(through_links),
              (" (" + ", ".join(through_links[:5]) + ")") if through_links else ""))
+    print("info: hub plates at their laps (not held yet): through each other up to %.3f mm (%s); "
+          "gap over the lap once one lies on the other up to %.3f mm (%s)"
+          % (stack_lift[0], stack_lift[1], stack_gap[0], stack_gap[1]))
     for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
                       ("hub lap", lap_fail), ("lap claim", claim_fail), ("bridge", bridge_fail),
                       ("weld", weld_fail), ("plates into each other", reach_fail)):
@@ -948,6 +1001,8 @@ def main(argv=None):
             "weld_gap_max": weld_w[1],
             "weld_claim_error_max": weld_claim[2],
             "reach_max": reach[0],
+            "hub_stack_lift_max": stack_lift[0],
+            "hub_stack_gap_max": stack_gap[0],
             "problems": ["%s: %s: %s" % p for p in struct],
             "failing": {"leg": leg_fail, "pin": pin_fail, "lap": lap_fail, "lap_claim": claim_fail,
                         "bridge": bridge_fail, "weld": weld_fail, "reach": reach_fail},

@@ -145,9 +145,21 @@ pub fn render(report: &CheckReport) -> String {
         rows.push(vec![
             row.name.clone(),
             number(row.worst),
-            number(row.limit),
+            if row.limit.is_finite() {
+                number(row.limit)
+            } else {
+                "-".into()
+            },
             row.at.clone(),
-            if row.ok { "ok" } else { "FAIL" }.to_string(),
+            // a row without a limit informs: nothing holds it yet
+            if row.limit.is_infinite() {
+                "info"
+            } else if row.ok {
+                "ok"
+            } else {
+                "FAIL"
+            }
+            .to_string(),
         ]);
     }
     output::table(&rows)

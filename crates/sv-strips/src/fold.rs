@@ -269,6 +269,16 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         "weld: plates of neighbouring strips apart (mm)",
         limits.weld_gap,
     );
+    // the hub plates lap: welded, one must lie on the other (not modelled yet: these rows
+    // say how far the frame is from it, docs/geometry.md 5.5)
+    let mut through = Row::max(
+        "hub plates at a lap through each other (mm; not held yet)",
+        Real::INFINITY,
+    );
+    let mut stacked = Row::max(
+        "hub plates at a lap, gap once stacked (mm; not held yet)",
+        Real::INFINITY,
+    );
     let thickness = params.thickness;
     for (li, link) in frame.links.iter().enumerate() {
         let [a, b] = link.units;
@@ -283,6 +293,12 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         let lap = (fa.hub_plate[k] - fb.hub_plate[m]).dot(&dir);
         laps.see(lap, at);
         claims.see((lap - link.hub_overlap).abs(), at);
+        if let Some((low, high)) = lap_heights(&fa.hub_plate, &fb.hub_plate) {
+            // the smaller move along the normal that puts one slab on the other, and the
+            // widest gap between them over the lap once it is made
+            through.see((thickness - low).min(high + thickness).max(0.0), at);
+            stacked.see(high - low, at);
+        }
         if strip_of.get(&a) != strip_of.get(&b) {
             // the plates of two strips meet where their tiles' sides do, the plates as cut
             // shortened at their ends where a bridge joins
@@ -338,12 +354,48 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         }
     }
     let rows = [
-        pins, legs, plates, laps, claims, welds, collisions, span, bend, twist, rebuilt,
+        pins, legs, plates, laps, claims, welds, collisions, span, bend, twist, rebuilt, through,
+        stacked,
     ]
     .into_iter()
     .map(Row::row)
     .collect();
     CheckReport { rows }
+}
+
+/// Two plates that lap: over their overlap seen along `b`'s normal, the lowest and highest
+/// height of `a`'s mid-plane above `b`'s (mm); `None` when they do not overlap. The heights
+/// are linear over the overlap, a convex polygon, so its corners give both.
+fn lap_heights(a: &[Point3; 4], b: &[Point3; 4]) -> Option<(Real, Real)> {
+    let nb = sv_frame::plates::plate_normal(b)?;
+    let na = sv_frame::plates::plate_normal(a)?;
+    if na.dot(&nb).abs() < 1e-6 {
+        return None;
+    }
+    let u = (b[1] - b[0]).normalize();
+    let v = nb.cross(&u);
+    let flat = |p: &Point3| Point2::new((p - b[0]).dot(&u), (p - b[0]).dot(&v));
+    let fb: Vec<Point2> = b.iter().map(flat).collect();
+    let mut fa: Vec<Point2> = a.iter().map(flat).collect();
+    if crate::plane::signed_area(&fa) < 0.0 {
+        fa.reverse();
+    }
+    let overlap = crate::plane::convex_clip(&fa, &fb);
+    if overlap.len() < 3 {
+        return None;
+    }
+    let height = |x: &Point2| {
+        let on_b = b[0] + u * x.x + v * x.y;
+        na.dot(&(a[0] - on_b)) / na.dot(&nb)
+    };
+    Some(
+        overlap
+            .iter()
+            .map(height)
+            .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), h| {
+                (lo.min(h), hi.max(h))
+            }),
+    )
 }
 
 fn centroid(q: &[Point3; 4]) -> Point3 {

@@ -19,14 +19,15 @@ pub(crate) fn signed_area(p: &[Point2]) -> f64 {
         / 2.0
 }
 
-/// Area of the intersection of two convex counter-clockwise polygons (Sutherland-Hodgman
-/// clipping of `a` by every edge of `b`; exact for convex `b`).
-pub fn convex_intersection_area(a: &[Point2], b: &[Point2]) -> f64 {
+/// The intersection of two convex counter-clockwise polygons (Sutherland-Hodgman clipping
+/// of `a` by every edge of `b`; exact for convex `b`), counter-clockwise; fewer than three
+/// points when they do not overlap.
+pub fn convex_clip(a: &[Point2], b: &[Point2]) -> Vec<Point2> {
     let mut poly: Vec<Point2> = a.to_vec();
     let n = b.len();
     for i in 0..n {
         if poly.is_empty() {
-            return 0.0;
+            break;
         }
         let (p, q) = (b[i], b[(i + 1) % n]);
         let e = q - p;
@@ -45,6 +46,12 @@ pub fn convex_intersection_area(a: &[Point2], b: &[Point2]) -> f64 {
             }
         }
     }
+    poly
+}
+
+/// Area of the intersection of two convex counter-clockwise polygons ([`convex_clip`]).
+pub fn convex_intersection_area(a: &[Point2], b: &[Point2]) -> f64 {
+    let poly = convex_clip(a, b);
     if poly.len() < 3 {
         0.0
     } else {
