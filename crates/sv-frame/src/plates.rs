@@ -173,6 +173,43 @@ pub fn plate_as_cut(tile: &[Point3; 4], inset: [Real; 4]) -> [Point3; 4] {
     })
 }
 
+/// Two plates that lap (hub plates): over their overlap seen along `b`'s normal, the lowest
+/// and highest height of `a`'s mid-plane above `b`'s (mm); `None` when they do not overlap
+/// or stand square to each other. The heights are linear over the overlap, a convex
+/// polygon, so its corners give both. Lying one on the other (`thickness` apart, never
+/// through each other) is `low >= thickness` or `high <= -thickness`.
+pub fn lap_heights(a: &[Point3; 4], b: &[Point3; 4]) -> Option<(Real, Real)> {
+    let nb = plate_normal(b)?;
+    let na = plate_normal(a)?;
+    if na.dot(&nb).abs() < 1e-6 {
+        return None;
+    }
+    let u = (b[1] - b[0]).normalize();
+    let v = nb.cross(&u);
+    let flat = |p: &Point3| [(p - b[0]).dot(&u), (p - b[0]).dot(&v)];
+    let fb: Vec<[Real; 2]> = b.iter().map(flat).collect();
+    let mut fa: Vec<[Real; 2]> = a.iter().map(flat).collect();
+    if sv_geom::planar::polygon_area(&fa) < 0.0 {
+        fa.reverse();
+    }
+    let overlap = sv_geom::planar::convex_clip(&fa, &fb);
+    if overlap.len() < 3 {
+        return None;
+    }
+    let height = |x: &[Real; 2]| {
+        let on_b = b[0] + u * x[0] + v * x[1];
+        na.dot(&(a[0] - on_b)) / na.dot(&nb)
+    };
+    Some(
+        overlap
+            .iter()
+            .map(height)
+            .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), h| {
+                (lo.min(h), hi.max(h))
+            }),
+    )
+}
+
 /// The turn of a hinge from plate `a`'s side `k` to plate `b`'s side `m` (the two facing
 /// sides run opposite ways): `(bend, twist)` in radians. `bend` is the turn of `b`'s side in
 /// `a`'s plane (about `a`'s normal), `twist` its turn out of it (about the line across the

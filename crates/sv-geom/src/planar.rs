@@ -94,6 +94,33 @@ pub fn polygon_area(pts: &[[f64; 2]]) -> f64 {
         / 2.0
 }
 
+/// The part of the convex polygon `a` inside the convex counter-clockwise polygon `b`
+/// (Sutherland-Hodgman: `a` clipped by every side of `b`), counter-clockwise when `a` is;
+/// fewer than three points when they do not overlap.
+pub fn convex_clip(a: &[[f64; 2]], b: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let mut poly: Vec<[f64; 2]> = a.to_vec();
+    for i in 0..b.len() {
+        if poly.is_empty() {
+            break;
+        }
+        let (p, q) = (b[i], b[(i + 1) % b.len()]);
+        let side = |x: &[f64; 2]| (q[0] - p[0]) * (x[1] - p[1]) - (q[1] - p[1]) * (x[0] - p[0]);
+        let input = std::mem::take(&mut poly);
+        for j in 0..input.len() {
+            let (c, d) = (input[j], input[(j + 1) % input.len()]);
+            let (sc, sd) = (side(&c), side(&d));
+            if sc >= 0.0 {
+                poly.push(c);
+            }
+            if (sc >= 0.0) != (sd >= 0.0) {
+                let t = sc / (sc - sd);
+                poly.push([c[0] + (d[0] - c[0]) * t, c[1] + (d[1] - c[1]) * t]);
+            }
+        }
+    }
+    poly
+}
+
 /// Axis-aligned bounds `(min, max)` of `pts` (infinite and reversed when empty).
 pub fn bbox(pts: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
     let mut lo = [f64::INFINITY; 2];

@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use sv_frame::plates::{edge_to_plate, hinge_turn, plate_as_cut, reach_into};
+use sv_frame::plates::{edge_to_plate, hinge_turn, lap_heights, plate_as_cut, reach_into};
 use sv_frame::{CheckReport, CheckRow, FrameFile};
 use sv_geom::{planar, rigid_fit, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
 use sv_unit::UnitLayout;
@@ -361,41 +361,6 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     .map(Row::row)
     .collect();
     CheckReport { rows }
-}
-
-/// Two plates that lap: over their overlap seen along `b`'s normal, the lowest and highest
-/// height of `a`'s mid-plane above `b`'s (mm); `None` when they do not overlap. The heights
-/// are linear over the overlap, a convex polygon, so its corners give both.
-fn lap_heights(a: &[Point3; 4], b: &[Point3; 4]) -> Option<(Real, Real)> {
-    let nb = sv_frame::plates::plate_normal(b)?;
-    let na = sv_frame::plates::plate_normal(a)?;
-    if na.dot(&nb).abs() < 1e-6 {
-        return None;
-    }
-    let u = (b[1] - b[0]).normalize();
-    let v = nb.cross(&u);
-    let flat = |p: &Point3| Point2::new((p - b[0]).dot(&u), (p - b[0]).dot(&v));
-    let fb: Vec<Point2> = b.iter().map(flat).collect();
-    let mut fa: Vec<Point2> = a.iter().map(flat).collect();
-    if crate::plane::signed_area(&fa) < 0.0 {
-        fa.reverse();
-    }
-    let overlap = crate::plane::convex_clip(&fa, &fb);
-    if overlap.len() < 3 {
-        return None;
-    }
-    let height = |x: &Point2| {
-        let on_b = b[0] + u * x.x + v * x.y;
-        na.dot(&(a[0] - on_b)) / na.dot(&nb)
-    };
-    Some(
-        overlap
-            .iter()
-            .map(height)
-            .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), h| {
-                (lo.min(h), hi.max(h))
-            }),
-    )
 }
 
 fn centroid(q: &[Point3; 4]) -> Point3 {

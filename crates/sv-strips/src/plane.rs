@@ -7,55 +7,15 @@ pub(crate) fn cross(a: &Vector2, b: &Vector2) -> f64 {
     a.x * b.y - a.y * b.x
 }
 
-/// Signed area of a polygon (positive counter-clockwise).
-pub(crate) fn signed_area(p: &[Point2]) -> f64 {
-    let n = p.len();
-    (0..n)
-        .map(|i| {
-            let (a, b) = (p[i], p[(i + 1) % n]);
-            a.x * b.y - a.y * b.x
-        })
-        .sum::<f64>()
-        / 2.0
-}
-
-/// The intersection of two convex counter-clockwise polygons (Sutherland-Hodgman clipping
-/// of `a` by every edge of `b`; exact for convex `b`), counter-clockwise; fewer than three
-/// points when they do not overlap.
-pub fn convex_clip(a: &[Point2], b: &[Point2]) -> Vec<Point2> {
-    let mut poly: Vec<Point2> = a.to_vec();
-    let n = b.len();
-    for i in 0..n {
-        if poly.is_empty() {
-            break;
-        }
-        let (p, q) = (b[i], b[(i + 1) % n]);
-        let e = q - p;
-        let side = |x: &Point2| cross(&e, &(x - p));
-        let input = std::mem::take(&mut poly);
-        let m = input.len();
-        for j in 0..m {
-            let (c, d) = (input[j], input[(j + 1) % m]);
-            let (sc, sd) = (side(&c), side(&d));
-            if sc >= 0.0 {
-                poly.push(c);
-            }
-            if (sc >= 0.0) != (sd >= 0.0) {
-                let t = sc / (sc - sd);
-                poly.push(c + (d - c) * t);
-            }
-        }
-    }
-    poly
-}
-
-/// Area of the intersection of two convex counter-clockwise polygons ([`convex_clip`]).
+/// Area of the intersection of two convex counter-clockwise polygons
+/// ([`sv_geom::planar::convex_clip`]).
 pub fn convex_intersection_area(a: &[Point2], b: &[Point2]) -> f64 {
-    let poly = convex_clip(a, b);
+    let flat = |p: &[Point2]| p.iter().map(|q| [q.x, q.y]).collect::<Vec<_>>();
+    let poly = sv_geom::planar::convex_clip(&flat(a), &flat(b));
     if poly.len() < 3 {
         0.0
     } else {
-        signed_area(&poly).max(0.0)
+        sv_geom::planar::polygon_area(&poly).max(0.0)
     }
 }
 
