@@ -31,6 +31,10 @@ Checks
   6. collisions: how far each facing edge of two strips' plates reaches into the
      other plate (depth inside its outline and inside its slab t either side,
      the smaller; the exact largest along the edge): <= 0.1 mm.
+  7. hub plates at their laps lie one on the other: over the overlap of the two
+     hub plates (seen along one's normal) the height of one mid-plane over the
+     other stays >= t (or <= -t); how far from it, <= 0.1 mm.  Informational:
+     the widest gap between the two over a lap.
 
 Exit status: 0 all pass, 1 some check failed, 2 input files unreadable.
 """
@@ -810,8 +814,9 @@ def main(argv=None):
     lap_max = -float("inf")
     lap_claim = (0.0, None)
     lap_fail, claim_fail = [], []
-    stack_lift = (0.0, None)  # hub plates at a lap: the move that puts one on the other
-    stack_gap = (0.0, None)   # ... and the widest gap between them over the lap then
+    stack_lift = (0.0, None)  # hub plates at a lap: how far from one lying on the other
+    stack_gap = (0.0, None)   # ... and the widest gap between them over the lap
+    stack_fail = []
     slot_mismatch = 0
     gap_max = (-float("inf"), None)
     through_links = []
@@ -835,11 +840,17 @@ def main(argv=None):
         laps_checked += 1
         lh = lap_heights(plate3[f], plate3[g])
         if lh is not None:
-            lift = max(0.0, min(thickness - lh[0], lh[1] + thickness))
+            # one slab on the other: 0; else the smaller move along the normal that makes it
+            lo, hi = lh
+            lift = max(0.0, min(thickness - lo, hi + thickness))
             if stack_lift[1] is None or lift > stack_lift[0]:
                 stack_lift = (lift, where)
-            if stack_gap[1] is None or lh[1] - lh[0] > stack_gap[0]:
-                stack_gap = (lh[1] - lh[0], where)
+            if lift > REACH_TOL:
+                stack_fail.append(where)
+            # widest gap between the two over the lap (the wedge when not yet stacked)
+            widest = hi - thickness if lo >= thickness else (-lo - thickness if hi <= -thickness else hi - lo)
+            if stack_gap[1] is None or widest > stack_gap[0]:
+                stack_gap = (widest, where)
         if lap < lap_min[0]:
             lap_min = (lap, where)
         lap_max = max(lap_max, lap)
@@ -943,6 +954,8 @@ def main(argv=None):
         weld_claim[0] or "-", weld_claim[2] <= LAP_CLAIM_TOL)
     row("plates of two strips into each other (mm)", "%.3g" % reach[0], "<= %g" % REACH_TOL, reach[1] or "-",
         not reach_fail)
+    row("hub plates at a lap into each other (mm)", "%.3g" % stack_lift[0], "<= %g" % REACH_TOL,
+        stack_lift[1] or "-", not stack_fail)
     row("DXF topology (slots/necks)", "%d problems" % len(struct), "0",
         (struct[0][1] if struct else "-"), not struct)
     row("kabsch residual (mm)", "%.3g" % kabsch_max, "<= %g" % KABSCH_TOL, "-", kabsch_max <= KABSCH_TOL)
@@ -963,12 +976,12 @@ def main(argv=None):
           "links with facing primary sides passing through each other: %d%s"
           % (gap_max[0], gap_max[1], gap_claim_err, len(through_links),
              (" (" + ", ".join(through_links[:5]) + ")") if through_links else ""))
-    print("info: hub plates at their laps (not held yet): through each other up to %.3f mm (%s); "
-          "gap over the lap once one lies on the other up to %.3f mm (%s)"
-          % (stack_lift[0], stack_lift[1], stack_gap[0], stack_gap[1]))
+    print("info: hub plates at their laps: widest gap between the two over a lap %.3f mm (%s)"
+          % (stack_gap[0], stack_gap[1]))
     for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
                       ("hub lap", lap_fail), ("lap claim", claim_fail), ("bridge", bridge_fail),
-                      ("weld", weld_fail), ("plates into each other", reach_fail)):
+                      ("weld", weld_fail), ("plates into each other", reach_fail),
+                      ("hub plates into each other", stack_fail)):
         if lst:
             print("FAIL %s: %d: %s%s" % (name, len(lst), ", ".join(lst[:10]), " ..." if len(lst) > 10 else ""))
     for p in struct[:10]:
@@ -1005,7 +1018,8 @@ def main(argv=None):
             "hub_stack_gap_max": stack_gap[0],
             "problems": ["%s: %s: %s" % p for p in struct],
             "failing": {"leg": leg_fail, "pin": pin_fail, "lap": lap_fail, "lap_claim": claim_fail,
-                        "bridge": bridge_fail, "weld": weld_fail, "reach": reach_fail},
+                        "bridge": bridge_fail, "weld": weld_fail, "reach": reach_fail,
+                        "hub_stack": stack_fail},
             "ok": bool(ok),
             "worst": {"leg_error": leg_err[1], "pin_offset": pin_off[1],
                       "lap_min": lap_min[1], "lap_claim_error": lap_claim[1],

@@ -258,6 +258,7 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
             )
             .and_then(|mut h| {
                 h.rhombus = h.rhombus.scaled(u.tile_scale.unwrap_or([1.0, 1.0])).ok()?;
+                h.centre += h.normal() * u.hub_lift.unwrap_or(0.0);
                 Some(h)
             })
         }) {

@@ -199,6 +199,11 @@ pub struct UnitRecord {
     /// hub's x, along its y]`, where the joint solve stretched it (extra field).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tile_scale: Option<[f64; 2]>,
+    /// How far the hub sits off its face's best-fit rhombus along the face's normal (mm),
+    /// where the joint solve lifted it so that lapping hubs lie one on the other (extra
+    /// field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hub_lift: Option<f64>,
 }
 
 /// Where the four legs of a unit are pinned, deployed (mm): leg `j` is a rigid bar from

@@ -185,6 +185,9 @@ pub struct Solved {
     /// One tile scale per unit, `[along the hub's x, along its y]`: 1 unless the joint
     /// solve stretched the tile's half-diagonals away from the face's best-fit rhombus.
     pub scales: Vec<[Real; 2]>,
+    /// One hub lift per unit (mm): how far the joint solve moved the hub off its face along
+    /// the face's normal, so that lapping hubs lie one on the other; 0 before.
+    pub lifts: Vec<Real>,
     /// How the primary plates meet at every link, when the joints were closed
     /// ([`crate::close_joints`]).
     pub joints: Option<Joints>,
@@ -342,6 +345,7 @@ pub fn solve(
         poses,
         spins: vec![options.spin_angle; n],
         scales: vec![[1.0, 1.0]; n],
+        lifts: vec![0.0; n],
         joints: None,
         evaluation,
         report,
@@ -1080,6 +1084,7 @@ impl Solved {
                     spin: ((self.spins[f] - self.options.spin_angle).abs() > 1e-12)
                         .then_some(self.spins[f]),
                     tile_scale: (self.scales[f] != [1.0, 1.0]).then_some(self.scales[f]),
+                    hub_lift: (self.lifts[f] != 0.0).then_some(self.lifts[f]),
                 }
             })
             .collect();

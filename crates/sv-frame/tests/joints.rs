@@ -123,6 +123,46 @@ fn closed_joints_keep_the_legs_exact_and_the_vertices_on_the_surface() {
     );
     assert_eq!(report.end.bridge_gap, worst_bridge);
 
+    // at every lap one hub plate lies on the other: sampled over the part of one plate
+    // above the other, its height over the other's mid-plane is a thickness or more,
+    // all on one side
+    let t = joint_options.thickness;
+    let p3 = |a: &[f64; 3]| Point3::new(a[0], a[1], a[2]);
+    for l in &file.links {
+        let [a, b] = l
+            .units
+            .map(|u| file.units[u].hub_plate.expect("hub plate").map(|c| p3(&c)));
+        let nb = (b[2] - b[0]).cross(&(b[3] - b[1])).normalize();
+        let mut heights = Vec::new();
+        for i in 0..=20 {
+            for j in 0..=20 {
+                let (s, r) = (i as f64 / 20.0, j as f64 / 20.0);
+                // bilinear over a's corners (a is planar: a point of its plate)
+                let p = a[0]
+                    + (a[1] - a[0]) * s
+                    + (a[3] - a[0]) * r
+                    + (a[2].coords - a[3].coords - a[1].coords + a[0].coords) * (s * r);
+                let inside =
+                    (0..4).all(|k| nb.cross(&(b[(k + 1) % 4] - b[k])).dot(&(p - b[k])) >= 0.0);
+                if inside {
+                    heights.push((p - b[0]).dot(&nb));
+                }
+            }
+        }
+        assert!(
+            !heights.is_empty(),
+            "link {:?}: the hubs do not lap",
+            l.units
+        );
+        let on_top = heights.iter().all(|&h| h >= t - 0.1);
+        let under = heights.iter().all(|&h| h <= -(t - 0.1));
+        assert!(
+            on_top || under,
+            "link {:?}: hub plates through each other: {heights:?}",
+            l.units
+        );
+    }
+
     // and the file passes its own check: records = plates, pins = cut, hubs = faces
     let check = check_frame(&file, &CheckOptions::default());
     let failing: Vec<_> = check

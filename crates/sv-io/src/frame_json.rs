@@ -471,6 +471,7 @@ pub(crate) mod tests {
             pins: None,
             spin: None,
             tile_scale: None,
+            hub_lift: None,
         };
         FrameFile {
             format: FRAME_FORMAT.into(),

@@ -32,7 +32,7 @@ use crate::{
 };
 use piece::{Join, Piece};
 pub(crate) use problem::joint_record;
-use problem::{edge_ratio, side_links, Problem};
+use problem::{edge_ratio, side_links, stacking, Problem, UNIT_COLUMNS};
 use unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints};
 
 /// The target surface the hub mesh stays on.
@@ -204,7 +204,7 @@ fn descend(
     progress: &mut dyn FnMut(usize, Real),
 ) -> Result<(usize, Vec<UnitPoints>), FrameError> {
     let nf = problem.faces.len();
-    let moves = 3 * problem.nv + 9 * nf;
+    let moves = 3 * problem.nv + UNIT_COLUMNS * nf;
     let scale = problem.model.scale;
     let mut units = problem
         .units(x, poses, true)
@@ -363,11 +363,12 @@ pub fn close_joints(
         emphasis: vec![1.0; links],
         stiffness: STIFFNESS[0],
         legs: 1.0,
-        joint_columns: (0..links).map(|l| 3 * nv + 9 * nf + l).collect(),
+        joint_columns: (0..links).map(|l| 3 * nv + UNIT_COLUMNS * nf + l).collect(),
         faces: &mesh.faces,
         links: &solved.links,
         bridges: bridges.to_vec(),
         side_links: side_links(&solved.links, nf),
+        on_top: stacking(&solved.links, nf),
         anchors: anchors_at(&{
             let mut x = vec![0.0; 3 * nv];
             for (v, p) in mesh.vertices.iter().enumerate() {
@@ -388,7 +389,7 @@ pub fn close_joints(
         near: options.closeness * scale,
     };
     let mut poses = plate_poses(solved);
-    let n = 3 * nv + 9 * nf + links;
+    let n = 3 * nv + UNIT_COLUMNS * nf + links;
     let mut x = vec![0.0; n];
     for (v, p) in mesh.vertices.iter().enumerate() {
         x[3 * v..3 * v + 3].copy_from_slice(p.coords.as_slice());
@@ -538,6 +539,7 @@ pub fn close_joints(
     let shapes: Vec<Shape> = (0..nf).map(|f| problem.shape(&x, f)).collect();
     let spins: Vec<Real> = shapes.iter().map(|s| s.spin).collect();
     let scales: Vec<[Real; 2]> = shapes.iter().map(|s| s.scale).collect();
+    let lifts: Vec<Real> = shapes.iter().map(|s| s.lift).collect();
     let hubs = (0..nf)
         .map(|f| {
             let degenerate = |why: &str| {
@@ -553,6 +555,7 @@ pub fn close_joints(
                 .rhombus
                 .scaled(scales[f])
                 .map_err(|_| degenerate("tile scaled to nothing"))?;
+            hub.centre += hub.normal() * shapes[f].lift;
             Ok(hub)
         })
         .collect::<Result<Vec<Hub>, FrameError>>()?;
@@ -604,6 +607,7 @@ pub fn close_joints(
         poses: unit_poses,
         spins,
         scales,
+        lifts,
         joints: Some(Joints {
             records: joints,
             thickness: options.thickness,
@@ -668,6 +672,7 @@ mod tests {
             links: &solved.links,
             bridges: bridges.clone(),
             side_links: side_links(&solved.links, nf),
+            on_top: stacking(&solved.links, nf),
             anchors: anchors.clone(),
             corners: vec![false; nv],
             start: mesh
@@ -685,7 +690,7 @@ mod tests {
             nv,
             near: 15.0,
             joint_columns: (0..solved.links.len())
-                .map(|l| 3 * nv + 9 * nf + l)
+                .map(|l| 3 * nv + UNIT_COLUMNS * nf + l)
                 .collect(),
             edge_ratios: vec![1.0; nf],
             // a two-unit strip piece on a sheet far too short: its length row acts
@@ -706,7 +711,7 @@ mod tests {
             legs: 1.0,
         };
         let poses = plate_poses(&solved);
-        let mut x = vec![0.0; 3 * nv + 9 * nf + solved.links.len()];
+        let mut x = vec![0.0; 3 * nv + UNIT_COLUMNS * nf + solved.links.len()];
         for (v, p) in mesh.vertices.iter().enumerate() {
             x[3 * v..3 * v + 3].copy_from_slice(p.coords.as_slice());
         }

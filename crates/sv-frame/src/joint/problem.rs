@@ -10,7 +10,7 @@ use super::piece::Piece;
 use super::unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints, INPUTS};
 use super::{Anchor, JointFigures, JointOptions};
 use crate::plates::{
-    edge_to_plate, hinge_turn, plate_as_cut, reach_into, reach_profile, REACH_ROWS,
+    edge_to_plate, hinge_turn, lap_heights, plate_as_cut, reach_into, reach_profile, REACH_ROWS,
 };
 use crate::solve::hub_overlap;
 use crate::GOAL_PLANARITY;
@@ -27,6 +27,13 @@ pub(super) const W_TURN: Real = 0.1;
 pub(super) const W_LEG: Real = 1000.0;
 pub(super) const W_COLLIDE: Real = 100.0;
 pub(super) const W_SCALE: Real = 0.3;
+pub(super) const W_LIFT: Real = 0.03;
+pub(super) const W_STACK: Real = 10.0;
+/// Columns of one unit after its face's vertices: its plate pose increment (6), spin (1),
+/// tile scales (2) and hub lift (1).
+pub(super) const UNIT_COLUMNS: usize = 10;
+/// How far beyond one thickness apart the solve keeps lapping hub plates (mm).
+pub(super) const STACK_MARGIN: Real = 0.05;
 pub(super) const W_LIMIT: Real = 100.0;
 /// A one-sided limit starts pushing at this fraction of it.
 pub(super) const MARGIN: Real = 0.8;
@@ -156,6 +163,8 @@ pub(super) struct Problem<'a> {
     pub(super) bridges: Vec<bool>,
     /// Per face and side: the link across it.
     pub(super) side_links: Vec<[Option<usize>; 4]>,
+    /// Per link: its first unit's hub plate lies on top of its second's at their lap.
+    pub(super) on_top: Vec<bool>,
     pub(super) anchors: Vec<Anchor>,
     /// Per vertex: a corner of the mesh (one face), held where it starts.
     pub(super) corners: Vec<bool>,
@@ -191,6 +200,46 @@ pub(super) fn side_links(links: &[Link], faces: usize) -> Vec<[Option<usize>; 4]
         }
     }
     at
+}
+
+/// Per link: whether its first unit's hub lies on top of its second's where they lap. The
+/// units are coloured in two (breadth first over the links) and the first colour's hubs
+/// lie on the second's, so that each hub is on top of all its neighbours or under all of
+/// them; where a mesh cannot be coloured in two (an odd cycle of faces), the link's
+/// lower-numbered unit lies on top.
+pub(super) fn stacking(links: &[Link], faces: usize) -> Vec<bool> {
+    let mut next: Vec<Vec<usize>> = vec![Vec::new(); faces];
+    for l in links {
+        let [f, g] = l.faces;
+        next[f].push(g);
+        next[g].push(f);
+    }
+    let mut colour: Vec<Option<bool>> = vec![None; faces];
+    for start in 0..faces {
+        if colour[start].is_some() {
+            continue;
+        }
+        colour[start] = Some(true);
+        let mut queue = std::collections::VecDeque::from([start]);
+        while let Some(f) = queue.pop_front() {
+            for &g in &next[f] {
+                if colour[g].is_none() {
+                    colour[g] = colour[f].map(|c| !c);
+                    queue.push_back(g);
+                }
+            }
+        }
+    }
+    links
+        .iter()
+        .map(|l| {
+            let [f, g] = l.faces;
+            match (colour[f], colour[g]) {
+                (Some(a), Some(b)) if a != b => a,
+                _ => f < g,
+            }
+        })
+        .collect()
 }
 
 /// One gradient row under construction: columns merged.
@@ -234,7 +283,7 @@ impl Problem<'_> {
     }
 
     pub(super) fn pose_column(&self, f: usize) -> usize {
-        3 * self.nv + 9 * f
+        3 * self.nv + UNIT_COLUMNS * f
     }
 
     /// Unit `f`'s spin and tile scales: the model's plus their changes in `x`.
@@ -244,6 +293,7 @@ impl Problem<'_> {
         Shape {
             spin: self.model.spin + x[c + 6] / k,
             scale: [1.0 + x[c + 7] / k, 1.0 + x[c + 8] / k],
+            lift: x[c + 9],
         }
     }
 
@@ -328,11 +378,12 @@ impl Problem<'_> {
                 }
                 sink.row(&row.cols, &row.vals, u.legs[j], W_LEG * self.legs);
             }
-            // the tile's scales: free, but not for nothing
+            // the tile's scales and the hub's lift: free, but not for nothing
             let c = self.pose_column(f);
             for i in 7..9 {
                 sink.row(&[c + i], &[1.0], x[c + i], W_SCALE);
             }
+            sink.row(&[c + 9], &[1.0], x[c + 9], W_LIFT);
         }
         // strip pieces no longer than their sheets let them be
         for (piece, cap) in &self.pieces {
@@ -408,7 +459,7 @@ impl Problem<'_> {
                 let col = self.joint_columns[li];
                 let (cols, idx) = self.link_columns(f, g, col);
                 let s = x[col] / scale;
-                let mut rows = self.link_rows(l, self.bridges[li], s, [&units[f], &units[g]], grad);
+                let mut rows = self.link_rows(li, s, [&units[f], &units[g]], grad);
                 for r in rows.iter_mut().filter(|r| r.kind != 2) {
                     r.w *= self.emphasis[li];
                 }
@@ -481,12 +532,12 @@ impl Problem<'_> {
     /// along `s`.
     pub(super) fn link_rows(
         &self,
-        l: &Link,
-        bridge: bool,
+        li: usize,
         s: Real,
         units: [&UnitPoints; 2],
         grad: bool,
     ) -> Vec<LinkRow> {
+        let (l, bridge) = (&self.links[li], self.bridges[li]);
         let [k, m] = l.slots;
         let (k1, m1) = ((k + 1) % 4, (m + 1) % 4);
         let h = 1e-4;
@@ -519,6 +570,37 @@ impl Problem<'_> {
                 w,
                 hub_plates: true,
                 grads: grads.map(|g| -g),
+                ds: 0.0,
+            });
+        }
+        // one hub plate on the other: a thickness apart over all their lap
+        {
+            let pts: [Point3; 8] = std::array::from_fn(|i| units[i / 4].points[4 + i % 4]);
+            let (t, top) = (o.thickness, self.on_top[li]);
+            let stack = |p: &[Point3; 8]| {
+                let (a, b) = ([p[0], p[1], p[2], p[3]], [p[4], p[5], p[6], p[7]]);
+                [lap_heights(&a, &b).map_or(0.0, |(low, high)| {
+                    let need = t + STACK_MARGIN;
+                    if top {
+                        (need - low).max(0.0)
+                    } else {
+                        (high + need).max(0.0)
+                    }
+                })]
+            };
+            let r = stack(&pts)[0];
+            let w = W_STACK * on(r);
+            let grads = if grad && w > 0.0 {
+                fd_jac(&pts, h, stack)[0]
+            } else {
+                [Vector3::zeros(); 8]
+            };
+            out.push(LinkRow {
+                kind: 2,
+                r,
+                w,
+                hub_plates: true,
+                grads,
                 ds: 0.0,
             });
         }

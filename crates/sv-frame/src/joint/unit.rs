@@ -16,9 +16,10 @@ use crate::Hub;
 
 /// Inputs of one unit: the 12 coordinates of its face's vertices (vertex-major), then the
 /// primary plate's rotation increment (3, an arc in mm at the length scale), its
-/// translation increment (3, mm), the hub's spin (an arc in mm at the length scale) and the
-/// tile's two half-diagonals (each scaled by `1 + input / length scale`).
-pub(crate) const INPUTS: usize = 21;
+/// translation increment (3, mm), the hub's spin (an arc in mm at the length scale), the
+/// tile's two half-diagonals (each scaled by `1 + input / length scale`) and the hub's lift
+/// off its face along the face's normal (mm).
+pub(crate) const INPUTS: usize = 22;
 
 /// How a unit sits on its face: the hub's spin in the face (rad) and the scales of its
 /// tile's half-diagonals against the face's best-fit rhombus (the cut, the hub plate with
@@ -27,6 +28,9 @@ pub(crate) const INPUTS: usize = 21;
 pub(crate) struct Shape {
     pub spin: Real,
     pub scale: [Real; 2],
+    /// The hub plate's lift off its face, along the face's normal (mm): where hubs lap, one
+    /// lies on the other.
+    pub lift: Real,
 }
 
 /// Points of one unit: the primary plate's corners (the tile), then the hub plate's.
@@ -129,7 +133,8 @@ impl Model {
         pose: &PlatePose,
         shape: Shape,
     ) -> Result<([Point3; POINTS], [Real; 4]), UnitFailure> {
-        let hub = Hub::fit(quad, shape.spin).ok_or(UnitFailure::NoHub)?;
+        let mut hub = Hub::fit(quad, shape.spin).ok_or(UnitFailure::NoHub)?;
+        hub.centre += hub.normal() * shape.lift;
         let e = self.expansion;
         let (legs, hub_plate, rhombus) = cut_of(&hub, self.cut.as_ref(), e, shape.scale)?;
         let mut points = [Point3::origin(); POINTS];
@@ -173,7 +178,9 @@ impl Model {
                 let mut p = *pose;
                 let mut a = shape;
                 let step = s * h;
-                if i == 18 {
+                if i == 21 {
+                    a.lift += step;
+                } else if i == 18 {
                     a.spin += step / self.scale;
                 } else if i >= 19 {
                     a.scale[i - 19] += step / self.scale;
@@ -238,6 +245,7 @@ mod tests {
         let shape = Shape {
             spin: model.spin,
             scale: [1.0, 1.0],
+            lift: 0.0,
         };
         let u = model.points(&quad, &pose, shape, true).unwrap();
         assert!(u.legs.iter().all(|e| e.abs() < 1e-6), "{:?}", u.legs);
@@ -255,6 +263,20 @@ mod tests {
             let rate = (moved.legs[j] - u.legs[j]) / 0.01;
             assert!((rate - dl[j][15]).abs() < 1e-3, "{rate} vs {}", dl[j][15]);
             assert!(dl[j][15].abs() > 1e-3);
+        }
+        // a hub lifted 2 mm off its face: its plate moves 2 mm along the face's normal, the
+        // primary plate stays, and the legs change as their derivative along the lift says
+        let lifted = model
+            .points(&quad, &pose, Shape { lift: 2.0, ..shape }, false)
+            .unwrap();
+        for i in 0..4 {
+            let d = lifted.points[4 + i] - u.points[4 + i];
+            assert!((d - hub.normal() * 2.0).norm() < 1e-9, "{d}");
+            assert!((lifted.points[i] - u.points[i]).norm() < 1e-12);
+        }
+        for j in 0..4 {
+            let rate = (lifted.legs[j] - u.legs[j]) / 2.0;
+            assert!((rate - dl[j][21]).abs() < 0.05, "{rate} vs {}", dl[j][21]);
         }
     }
 }
