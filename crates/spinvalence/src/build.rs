@@ -285,14 +285,15 @@ fn shallower_hub(p: &sv_strips::ProfileParams, by: f64) -> String {
         Some(l) => format!(
             "the legs and rim are the narrowest {} mm sheet allows: a thinner sheet, \
              profile.thickness = {}, leg_width = {}, neck_width = {}, rim_width = {}, \
-             slot_width = {}, neck_length = {}",
+             slot_width = {}, neck_length = {}, fillet_radius = {}",
             number(p.thickness),
             number(l.thickness),
             number(l.leg_width),
             number(l.neck_width),
             number(l.rim_width),
             number(l.slot_width),
-            number(l.neck_length)
+            number(l.neck_length),
+            number(l.fillet_radius)
         ),
         None => format!(
             "no sheet's least profile does: the legs and rim are the narrowest {} mm sheet \
@@ -854,7 +855,8 @@ mod tests {
         };
         assert!(shallower_hub(&wide, 1.0).contains("profile.leg_width 20"));
         // the default's legs and rim are the least 2.5 mm sheet allows: a thinner sheet,
-        // whose widths are valid and put the hub at least 1.3 mm less deep
+        // whose widths (the fillets too: as copied from the message) are valid and put the
+        // hub at least 1.3 mm less deep
         let d = ProfileParams::default();
         let text = shallower_hub(&d, 1.3);
         let named = ProfileParams {
@@ -864,7 +866,7 @@ mod tests {
             rim_width: value(&text, "rim_width"),
             slot_width: value(&text, "slot_width"),
             neck_length: value(&text, "neck_length"),
-            fillet_radius: 1.0,
+            fillet_radius: value(&text, "fillet_radius"),
             ..d.clone()
         };
         assert_eq!(named.thickness, 2.0, "{text}");
