@@ -125,7 +125,49 @@ fn cut_of(
     }
 }
 
+/// What a unit's face, spin and tile scales make of it: its hub (on the face), the legs and
+/// hub plate of its cut (hub frame) and its tile's rhombus. Its pose and its hub's lift only
+/// place it.
+struct Made {
+    hub: Hub,
+    legs: Linkage,
+    hub_plate: [Point3; 4],
+    rhombus: Rhombus,
+}
+
 impl Model {
+    /// The unit on `quad` with `shape`'s spin and scales (a hub fit and a cut).
+    fn make(&self, quad: &[Point3; 4], shape: Shape) -> Result<Made, UnitFailure> {
+        let hub = Hub::fit(quad, shape.spin).ok_or(UnitFailure::NoHub)?;
+        let (legs, hub_plate, rhombus) =
+            cut_of(&hub, self.cut.as_ref(), self.expansion, shape.scale)?;
+        Ok(Made {
+            hub,
+            legs,
+            hub_plate,
+            rhombus,
+        })
+    }
+
+    /// The unit's points and leg errors, `made` with its primary plate at `pose` and its
+    /// hub lifted by `lift`.
+    fn place(&self, made: &Made, pose: &PlatePose, lift: Real) -> ([Point3; POINTS], [Real; 4]) {
+        let mut hub = made.hub;
+        hub.centre += hub.normal() * lift;
+        let e = self.expansion;
+        let mut points = [Point3::origin(); POINTS];
+        for (i, c) in made.rhombus.corners().iter().enumerate() {
+            points[i] = Point3::from(pose.q * (c * e) + pose.t);
+            points[4 + i] = hub.to_world(&made.hub_plate[i]);
+        }
+        let errors = std::array::from_fn(|j| {
+            let h = hub.to_world(&Point3::from(made.legs.hub[j]));
+            let r = pose.q * made.legs.rim[j] + pose.t;
+            (h.coords - r).norm() - made.legs.length[j]
+        });
+        (points, errors)
+    }
+
     /// The unit's points and leg errors at `quad` with its primary plate at `pose`.
     fn eval(
         &self,
@@ -133,21 +175,7 @@ impl Model {
         pose: &PlatePose,
         shape: Shape,
     ) -> Result<([Point3; POINTS], [Real; 4]), UnitFailure> {
-        let mut hub = Hub::fit(quad, shape.spin).ok_or(UnitFailure::NoHub)?;
-        hub.centre += hub.normal() * shape.lift;
-        let e = self.expansion;
-        let (legs, hub_plate, rhombus) = cut_of(&hub, self.cut.as_ref(), e, shape.scale)?;
-        let mut points = [Point3::origin(); POINTS];
-        for (i, c) in rhombus.corners().iter().enumerate() {
-            points[i] = Point3::from(pose.q * (c * e) + pose.t);
-            points[4 + i] = hub.to_world(&hub_plate[i]);
-        }
-        let errors = std::array::from_fn(|j| {
-            let h = hub.to_world(&Point3::from(legs.hub[j]));
-            let r = pose.q * legs.rim[j] + pose.t;
-            (h.coords - r).norm() - legs.length[j]
-        });
-        Ok((points, errors))
+        Ok(self.place(&self.make(quad, shape)?, pose, shape.lift))
     }
 
     /// The unit's points and leg errors; with `derivatives`, their derivatives along its
@@ -160,7 +188,8 @@ impl Model {
         shape: Shape,
         derivatives: bool,
     ) -> Result<UnitPoints, UnitFailure> {
-        let (points, legs) = self.eval(quad, pose, shape)?;
+        let made = self.make(quad, shape)?;
+        let (points, legs) = self.place(&made, pose, shape.lift);
         if !derivatives {
             return Ok(UnitPoints {
                 points,
@@ -178,22 +207,27 @@ impl Model {
                 let mut p = *pose;
                 let mut a = shape;
                 let step = s * h;
-                if i == 21 {
-                    a.lift += step;
-                } else if i == 18 {
+                // the pose and the lift only place the unit: no new hub fit and cut
+                if (12..18).contains(&i) || i == 21 {
+                    if i == 21 {
+                        a.lift += step;
+                    } else if i < 15 {
+                        let mut w = Vector3::zeros();
+                        w[i - 12] = step / self.scale;
+                        p = pose.moved(&w, &Vector3::zeros());
+                    } else {
+                        let mut v = Vector3::zeros();
+                        v[i - 15] = step;
+                        p = pose.moved(&Vector3::zeros(), &v);
+                    }
+                    return Ok(self.place(&made, &p, a.lift));
+                }
+                if i == 18 {
                     a.spin += step / self.scale;
                 } else if i >= 19 {
                     a.scale[i - 19] += step / self.scale;
-                } else if i < 12 {
-                    q[i / 3][i % 3] += step;
-                } else if i < 15 {
-                    let mut w = Vector3::zeros();
-                    w[i - 12] = step / self.scale;
-                    p = pose.moved(&w, &Vector3::zeros());
                 } else {
-                    let mut v = Vector3::zeros();
-                    v[i - 15] = step;
-                    p = pose.moved(&Vector3::zeros(), &v);
+                    q[i / 3][i % 3] += step;
                 }
                 self.eval(&q, &p, a)
             };
