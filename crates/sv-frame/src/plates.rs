@@ -148,7 +148,10 @@ pub fn reach_into(a: &[Point3; 4], p: &Point3, q: &Point3, thickness: Real) -> R
 /// A primary plate as cut from its (expanded) tile: side `k` moved into the tile's plane by
 /// `inset[k]` (half the joint slot where a bridge joins the strip's next unit there, 0 where
 /// the plate reaches the tile's side; `docs/fabrication.md` 3). The corner fillets are left
-/// out (they take at most `fillet_radius (sqrt 2 - 1)` off a right corner).
+/// out (they take at most `fillet_radius (sqrt 2 - 1)` off a right corner). Each corner
+/// moves from its own tile corner, so it follows that corner off the plane too: the solve
+/// differentiates it that way (`sv_unit::inset_sides` on the flattened tile would put all
+/// four in one plane and change those derivatives, and with them the solve's result).
 pub fn plate_as_cut(tile: &[Point3; 4], inset: [Real; 4]) -> [Point3; 4] {
     let Some(n) = plate_normal(tile) else {
         return *tile;

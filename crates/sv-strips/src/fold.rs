@@ -453,15 +453,13 @@ fn fold_unit(
     let leg_errors = std::array::from_fn(|k| {
         ((hub_world[k] - rim_world[k]).norm() - (hub_pins[k] - rim_pins[k]).norm()).abs()
     });
+    let tile = flat.map(|p| primary * lift(&p));
     Ok((
         Folded {
             primary,
             hub_plate: layout.hub.map(|p| hub * lift(&p)),
-            tile: flat.map(|p| primary * lift(&p)),
-            plate: plate_as_cut(
-                &flat.map(|p| primary * lift(&p)),
-                bridged_insets(strip, u, widths.joint),
-            ),
+            tile,
+            plate: plate_as_cut(&tile, bridged_insets(strip, u, widths.joint)),
         },
         Necks {
             pin_offsets,

@@ -543,64 +543,49 @@ impl Problem<'_> {
         let h = 1e-4;
         let o = self.options;
         let mut out = Vec::with_capacity(12);
-        // hub laps: at least the weld minimum, or all of one length
-        if o.min_overlap > 0.0 || o.overlap.is_some() {
-            let pts: [Point3; 8] = std::array::from_fn(|i| units[i / 4].points[4 + i % 4]);
-            let lap = |p: &[Point3; 8]| {
-                let cf = centroid4(&p[0..4]);
-                let cg = centroid4(&p[4..8]);
-                [hub_overlap(&cf, &p[k], &cg, &p[4 + m])]
+        // the hub plates: their lap at least the weld minimum (or all of one length), and one
+        // lying on the other, a thickness apart over all their lap
+        let pts: [Point3; 8] = std::array::from_fn(|i| units[i / 4].points[4 + i % 4]);
+        let laps = o.min_overlap > 0.0 || o.overlap.is_some();
+        let (t, top) = (o.thickness, self.on_top[li]);
+        let hub_rows = |p: &[Point3; 8]| {
+            let (a, b) = ([p[0], p[1], p[2], p[3]], [p[4], p[5], p[6], p[7]]);
+            let lap = hub_overlap(&centroid4(&a), &a[k], &centroid4(&b), &b[m]);
+            let short = match o.overlap {
+                Some(target) => target - lap,
+                None if laps => (o.min_overlap + LAP_MARGIN - lap).max(0.0),
+                None => 0.0,
             };
-            let now = lap(&pts)[0];
-            let (r, w) = match o.overlap {
-                Some(target) => (target - now, W_LAP),
-                None => {
-                    let short = (o.min_overlap + LAP_MARGIN - now).max(0.0);
-                    (short, W_LAP * on(short))
+            let into = lap_heights(&a, &b).map_or(0.0, |(low, high)| {
+                let need = t + STACK_MARGIN;
+                if top {
+                    (need - low).max(0.0)
+                } else {
+                    (high + need).max(0.0)
                 }
-            };
-            let grads = if grad && w > 0.0 {
-                fd_jac(&pts, h, lap)[0]
-            } else {
-                [Vector3::zeros(); 8]
-            };
-            out.push(LinkRow {
-                kind: 2,
-                r,
-                w,
-                hub_plates: true,
-                grads: grads.map(|g| -g),
-                ds: 0.0,
             });
-        }
-        // one hub plate on the other: a thickness apart over all their lap
-        {
-            let pts: [Point3; 8] = std::array::from_fn(|i| units[i / 4].points[4 + i % 4]);
-            let (t, top) = (o.thickness, self.on_top[li]);
-            let stack = |p: &[Point3; 8]| {
-                let (a, b) = ([p[0], p[1], p[2], p[3]], [p[4], p[5], p[6], p[7]]);
-                [lap_heights(&a, &b).map_or(0.0, |(low, high)| {
-                    let need = t + STACK_MARGIN;
-                    if top {
-                        (need - low).max(0.0)
-                    } else {
-                        (high + need).max(0.0)
-                    }
-                })]
-            };
-            let r = stack(&pts)[0];
-            let w = W_STACK * on(r);
-            let grads = if grad && w > 0.0 {
-                fd_jac(&pts, h, stack)[0]
-            } else {
-                [Vector3::zeros(); 8]
-            };
+            [short, into]
+        };
+        let now = hub_rows(&pts);
+        let weights = [
+            match o.overlap {
+                Some(_) => W_LAP,
+                None => W_LAP * on(now[0]),
+            },
+            W_STACK * on(now[1]),
+        ];
+        let grads = if grad && weights.iter().any(|&w| w > 0.0) {
+            fd_jac(&pts, h, hub_rows)
+        } else {
+            [[Vector3::zeros(); 8]; 2]
+        };
+        for i in 0..2 {
             out.push(LinkRow {
                 kind: 2,
-                r,
-                w,
+                r: now[i],
+                w: weights[i],
                 hub_plates: true,
-                grads,
+                grads: grads[i],
                 ds: 0.0,
             });
         }
