@@ -146,6 +146,18 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
 /// few degrees); every weld between strips found, its plates at most 1.5 mm apart and as
 /// frame.json says; no plate 0.1 mm into its neighbour.
 fn joints_hold(what: &str, fig: &Value) {
+    bridges_hold(what, fig);
+    assert!(f(fig, "welds_checked") > 0.0, "{what}: {fig}");
+    assert!(f(fig, "weld_gap_max") <= 1.5, "{what}: {fig}");
+    assert!(f(fig, "weld_claim_error_max") <= 0.1, "{what}: {fig}");
+    assert!(f(fig, "reach_max") <= 0.1, "{what}: {fig}");
+    // the hub plates lie one on the other at every lap, never through it
+    assert!(f(fig, "hub_stack_lift_max") <= 0.1, "{what}: {fig}");
+}
+
+/// Every bridge in the strips, found by our code in the DXF outlines, spans its joint and
+/// bends and twists within its limits.
+fn bridges_hold(what: &str, fig: &Value) {
     assert!(f(fig, "bridges_checked") > 0.0, "{what}: {fig}");
     assert_eq!(
         fig["bridges_checked"], fig["bridges_in_strips"],
@@ -161,19 +173,14 @@ fn joints_hold(what: &str, fig: &Value) {
         f(fig, "bridge_twist_max_deg") <= f(fig, "bridge_twist_limit_deg"),
         "{what}: {fig}"
     );
-    assert!(f(fig, "welds_checked") > 0.0, "{what}: {fig}");
-    assert!(f(fig, "weld_gap_max") <= 1.5, "{what}: {fig}");
-    assert!(f(fig, "weld_claim_error_max") <= 0.1, "{what}: {fig}");
-    assert!(f(fig, "reach_max") <= 0.1, "{what}: {fig}");
-    // the hub plates lie one on the other at every lap, never through it
-    assert!(f(fig, "hub_stack_lift_max") <= 0.1, "{what}: {fig}");
 }
 
 /// Issue 14's acceptance on the other targets at 300 mm with the default parameters, by our
 /// own fold code: every leg within 0.5 mm of its length, every hub lap of at least the weld
 /// minimum and reported within 0.1 mm of what the parts show, and the slots as the profile
 /// rules draw them. The joints close on the dome, the vault and the hypar; on the saddle
-/// some stay open (docs/geometry.md 6.9), and the build and `check` say so with our figures.
+/// the strips are split where bridges cannot be made, and some welds stay open
+/// (docs/geometry.md 6.9): the build and `check` say so with our figures.
 #[test]
 fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
     let hypar = concat!(
@@ -201,6 +208,16 @@ fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
         let checked = dir.run(&["check", "out"]);
         agrees_with_check(&checked, &fig);
         if saddle {
+            // the bridges the solve could not make are where the strips are split, named
+            // in the summary: every bridge left in the strips folds within its limits, and
+            // the hub plates lie one on the other
+            assert!(
+                row(&built, "bridges (in strips)").contains("the strips are split there"),
+                "{}",
+                built.stdout
+            );
+            bridges_hold(target, &fig);
+            assert!(f(&fig, "hub_stack_lift_max") <= 0.1, "{target}: {fig}");
             // open joints are named, by the build's check as by ours
             checked.expect_code(1);
             assert_eq!(code, 1, "{target}: {stdout}");

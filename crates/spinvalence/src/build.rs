@@ -358,6 +358,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
             .overlap_target(&solved.evaluation.overlaps, min_overlap)?;
         let joint_options = sv_frame::JointOptions {
             max_iterations: cfg.joints.max_iterations,
+            split_iterations: cfg.joints.split_iterations,
             min_overlap,
             overlap,
             limits: p.joint_limits(),
@@ -526,7 +527,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         let mut rows = summary_rows(&cfg, &report, unit, &solved.report, (min, max), &timings);
         if let Some(j) = &joints {
             let at = rows.len() - 2;
-            let mut joint = joint_rows(j, cfg.strips.direction);
+            let mut joint = joint_rows(j, cfg.strips.direction, &frame);
             joint.push(open_joints_row(&frame));
             rows.splice(at..at, joint);
         }
@@ -642,22 +643,51 @@ impl JointScore {
 }
 
 /// The summary's rows of the joint solve: the worst bridge and weld, before and after.
-fn joint_rows(j: &sv_frame::JointReport, d: sv_strips::StripDirection) -> Vec<Vec<String>> {
+/// The strips are split where the solve could not make a bridge: those are named with how
+/// far off they were.
+fn joint_rows(
+    j: &sv_frame::JointReport,
+    d: sv_strips::StripDirection,
+    frame: &sv_frame::FrameFile,
+) -> Vec<Vec<String>> {
     let (a, b) = (&j.start, &j.end);
+    let mut bridges = format!(
+        "strips along {}: apart {} -> {} mm, bent {:.1} -> {:.1} deg, twisted {:.1} -> {:.1} deg",
+        direction_name(d),
+        number(a.bridge_gap),
+        number(b.bridge_gap),
+        a.bridge_bend.to_degrees(),
+        b.bridge_bend.to_degrees(),
+        a.bridge_twist.to_degrees(),
+        b.bridge_twist.to_degrees()
+    );
+    if !j.splits.is_empty() {
+        let id = |u: usize| frame.units.get(u).map_or("?", |r| r.id.as_str());
+        let named: Vec<String> = j
+            .splits
+            .iter()
+            .take(3)
+            .filter_map(|(l, r)| {
+                let [f, g] = frame.links.get(*l)?.units;
+                Some(format!(
+                    "{} - {} apart {} mm, bent {:.1} deg",
+                    id(f),
+                    id(g),
+                    number(r.gap),
+                    r.bend.abs().to_degrees()
+                ))
+            })
+            .collect();
+        bridges.push_str(&format!(
+            "; {} bridges the solve could not make: the strips are split there and welded on \
+             site ({}{})",
+            j.splits.len(),
+            named.join("; "),
+            if j.splits.len() > 3 { "; ..." } else { "" }
+        ));
+    }
     vec![
-        vec![
-            "bridges (in strips)".into(),
-            format!(
-                "strips along {}: apart {} -> {} mm, bent {:.1} -> {:.1} deg, twisted {:.1} -> {:.1} deg",
-                direction_name(d),
-                number(a.bridge_gap),
-                number(b.bridge_gap),
-                a.bridge_bend.to_degrees(),
-                b.bridge_bend.to_degrees(),
-                a.bridge_twist.to_degrees(),
-                b.bridge_twist.to_degrees()
-            ),
-        ],
+        vec!["bridges (in strips)".into(), bridges],
         vec![
             "welds (between strips)".into(),
             format!(

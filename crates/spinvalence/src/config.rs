@@ -318,6 +318,9 @@ pub struct JointsConfig {
     pub close: bool,
     /// Largest number of solver iterations.
     pub max_iterations: usize,
+    /// Iterations after the bridges the solve could not make are split (welded on site
+    /// instead), only when there are such bridges; 0 leaves them as they are.
+    pub split_iterations: usize,
     /// Close the joints with the strips along both mesh directions and keep the one whose
     /// joints hold better (`[strips] direction` is tried first); `--strip-direction` on the
     /// command line tries only the direction it names.
@@ -329,6 +332,7 @@ impl Default for JointsConfig {
         Self {
             close: true,
             max_iterations: sv_frame::JointOptions::default().max_iterations,
+            split_iterations: sv_frame::JointOptions::default().split_iterations,
             both_directions: true,
         }
     }

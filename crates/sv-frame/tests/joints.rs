@@ -100,16 +100,14 @@ fn closed_joints_keep_the_legs_exact_and_the_vertices_on_the_surface() {
 
     // every link has its joint, of the kind asked for, and the bridges came closer
     let records: Vec<_> = file.links.iter().map(|l| l.joint.expect("joint")).collect();
-    for (r, &b) in records.iter().zip(&bridges) {
+    for (li, (r, &b)) in records.iter().zip(&bridges).enumerate() {
         let kind = if b {
             JointKind::Bridge
         } else {
             JointKind::Weld
         };
-        assert!(
-            r.kind == kind || report.splits.iter().any(|(_, j)| j.along == r.along),
-            "{r:?}"
-        );
+        let split = report.splits.iter().any(|&(l, _)| l == li);
+        assert!(r.kind == kind || (b && split), "link {li}: {r:?}");
     }
     let worst_bridge = records
         .iter()
@@ -218,4 +216,72 @@ fn a_constant_overlap_gives_every_hub_lap_one_length() {
         .find(|r| r.name.starts_with("hub overlap matches file"))
         .expect("hub overlap row");
     assert!(row.ok, "{row:?}");
+}
+
+#[test]
+fn bridges_the_budget_cannot_make_are_split_and_welded() {
+    let (mesh, solved) = solved_cap();
+    let bridges: Vec<bool> = solved.links.iter().map(|l| l.slots[0] % 2 == 0).collect();
+    // a web that hardly twists: not every bridge can be made
+    let d = JointOptions::default();
+    let tight = JointOptions {
+        max_iterations: 40,
+        split_iterations: 30,
+        min_overlap: 0.0,
+        limits: sv_frame::JointLimits {
+            twist: 0.2f64.to_radians(),
+            ..d.limits
+        },
+        ..d
+    };
+    let limits = tight.limits;
+    let failing = |s: &sv_frame::Solved| -> Vec<usize> {
+        let records = &s.joints.as_ref().expect("joints").records;
+        (0..records.len())
+            .filter(|&l| records[l].kind == JointKind::Bridge && !limits.bridge_holds(&records[l]))
+            .collect()
+    };
+    let unsplit_options = JointOptions {
+        split_iterations: 0,
+        ..tight.clone()
+    };
+    let (_, unsplit, plain) = close_joints(
+        &mesh,
+        &solved,
+        &Sphere,
+        &bridges,
+        &unsplit_options,
+        &mut |_, _| {},
+    )
+    .expect("joint solve");
+    let open = failing(&unsplit);
+    assert!(!open.is_empty(), "every bridge made");
+    assert!(
+        plain.splits.is_empty() && plain.iterations <= 40,
+        "{plain:?}"
+    );
+
+    let (_, split, report) =
+        close_joints(&mesh, &solved, &Sphere, &bridges, &tight, &mut |_, _| {})
+            .expect("joint solve");
+    // the split bridges were bridges outside their limits, and are welds now
+    assert!(!report.splits.is_empty());
+    let records = &split.joints.as_ref().expect("joints").records;
+    for (l, j) in &report.splits {
+        assert!(bridges[*l] && !limits.bridge_holds(j), "link {l}: {j:?}");
+        assert_eq!(records[*l].kind, JointKind::Weld, "link {l}");
+    }
+    // the split round ran on top of the budget, and fewer bridges are open than before
+    assert!(
+        report.iterations > plain.iterations && report.iterations <= 40 + 30,
+        "{} after {}",
+        report.iterations,
+        plain.iterations
+    );
+    assert!(
+        failing(&split).len() < open.len(),
+        "{:?} still open, {:?} before",
+        failing(&split),
+        open
+    );
 }

@@ -58,6 +58,10 @@ pub struct Anchor {
 pub struct JointOptions {
     /// Largest number of Levenberg-Marquardt iterations.
     pub max_iterations: usize,
+    /// Iterations after the bridges the solve could not make are split (welded on site
+    /// instead): only when there are such bridges, on top of `max_iterations`, per round
+    /// of splits (at most three).
+    pub split_iterations: usize,
     /// Largest distance of a vertex from its anchor plane (and line), as a fraction of the
     /// mean side.
     pub closeness: Real,
@@ -98,6 +102,7 @@ impl Default for JointOptions {
     fn default() -> Self {
         Self {
             max_iterations: 250,
+            split_iterations: 50,
             closeness: 0.05,
             min_overlap: 0.0,
             overlap: None,
@@ -177,6 +182,8 @@ const STALL: Real = 1e-6;
 /// The legs' weight factors of the polish at the end, and its iterations per factor.
 const LEG_POLISH: [Real; 2] = [30.0, 1000.0];
 const POLISH_ITERATIONS: usize = 10;
+/// Rounds of splitting the bridges that cannot be made, at most.
+const SPLIT_ROUNDS: usize = 3;
 /// The stages of [`Problem::stiffness`].
 const STIFFNESS: [Real; 4] = [0.0, 0.03, 0.1, 0.3];
 
@@ -457,7 +464,7 @@ pub fn close_joints(
             units: p.units.clone(),
             joins,
         };
-        let now = problem.piece_length(&piece, &x, &units, None);
+        let now = problem.piece_length(&piece, &x, &units);
         problem.pieces.push((piece, now * p.room));
     }
     let start = problem.figures(&x, &units);
@@ -510,6 +517,36 @@ pub fn close_joints(
         }
         // the new welds weigh as welds from the start
         ne = NormalEquations::new(n);
+    }
+    // the bridges the closing stages could not make (their iterations used up): the
+    // strips are split there, and the welds that take their place get a round of their own
+    // (a few rounds, as a round may leave a bridge beside them outside its limits)
+    for _ in 0..SPLIT_ROUNDS {
+        let failing: Vec<(usize, JointRecord)> = problem
+            .records(&x, &units)
+            .into_iter()
+            .enumerate()
+            .filter(|(li, j)| problem.bridges[*li] && !problem.options.limits.bridge_holds(j))
+            .collect();
+        if failing.is_empty() || options.split_iterations == 0 {
+            break;
+        }
+        for (li, j) in failing {
+            problem.bridges[li] = false;
+            demoted.push((li, j));
+        }
+        ne = NormalEquations::new(n);
+        let (used, u) = descend(
+            &mut problem,
+            &mut ne,
+            &mut x,
+            &mut poses,
+            options.split_iterations,
+            &anchors_at,
+            &mut |it, e| progress(iterations + it, e),
+        )?;
+        iterations += used;
+        units = u;
     }
     // the legs made stiffer step by step, the rest as it was: where a unit sits near a
     // singular pose (a nearly symmetric tile) its legs' last micrometre would otherwise

@@ -74,17 +74,16 @@ pub(super) fn flat_length(tiles: &[[Point3; 4]], joins: &[Join]) -> Real {
 }
 
 impl Problem<'_> {
-    /// A strip piece's flat length ([`flat_length`]) at `x`; with `row`, its gradient.
-    pub(super) fn piece_length(
+    /// A strip piece's tiles and joins at `x`.
+    fn piece_at(
         &self,
         piece: &Piece,
         x: &[Real],
         units: &[UnitPoints],
-        row: Option<&mut Row>,
-    ) -> Real {
+    ) -> (Vec<[Point3; 4]>, Vec<Join>) {
         let scale = self.model.scale;
-        let mut tiles: Vec<[Point3; 4]> = piece.units.iter().map(|&f| units[f].primary()).collect();
-        let mut joins: Vec<Join> = piece
+        let tiles = piece.units.iter().map(|&f| units[f].primary()).collect();
+        let joins = piece
             .joins
             .iter()
             .map(|j| Join {
@@ -92,15 +91,38 @@ impl Problem<'_> {
                 ..*j
             })
             .collect();
-        let length = flat_length(&tiles, &joins);
-        let Some(row) = row else {
-            return length;
-        };
+        (tiles, joins)
+    }
+
+    /// A strip piece's flat length ([`flat_length`]) at `x`.
+    pub(super) fn piece_length(&self, piece: &Piece, x: &[Real], units: &[UnitPoints]) -> Real {
+        let (tiles, joins) = self.piece_at(piece, x, units);
+        flat_length(&tiles, &joins)
+    }
+
+    /// The gradient of a piece's flat length at `x` into `row`: its columns always, in the
+    /// same order, and their values only if `values` (else zeros).
+    pub(super) fn piece_gradient(
+        &self,
+        piece: &Piece,
+        x: &[Real],
+        units: &[UnitPoints],
+        values: bool,
+        row: &mut Row,
+    ) {
+        let scale = self.model.scale;
+        let (mut tiles, mut joins) = self.piece_at(piece, x, units);
         let h = 1e-4;
         for (n, &f) in piece.units.iter().enumerate() {
             let Some(d) = &units[f].d else {
                 continue;
             };
+            if !values {
+                for i in 0..INPUTS {
+                    row.add(self.column(f, i), 0.0);
+                }
+                continue;
+            }
             for p in 0..4 {
                 for c in 0..3 {
                     let keep = tiles[n][p][c];
@@ -117,6 +139,11 @@ impl Problem<'_> {
             }
         }
         for j in 0..joins.len() {
+            let col = self.joint_columns[joins[j].link];
+            if !values {
+                row.add(col, 0.0);
+                continue;
+            }
             let keep = joins[j].s;
             let h = 1e-6;
             joins[j].s = keep + h;
@@ -124,12 +151,8 @@ impl Problem<'_> {
             joins[j].s = keep - h;
             let down = flat_length(&tiles, &joins);
             joins[j].s = keep;
-            row.add(
-                self.joint_columns[joins[j].link],
-                (up - down) / (2.0 * h) / scale,
-            );
+            row.add(col, (up - down) / (2.0 * h) / scale);
         }
-        length
     }
 }
 

@@ -116,7 +116,8 @@ pub(super) const ROWS: usize = 8 + 2 * REACH_ROWS;
 pub(super) struct LinkBlock {
     cols: Vec<usize>,
     rows: Vec<LinkRow>,
-    vals: Vec<Vec<Real>>,
+    /// The rows' gradients along `cols`, row after row (empty without gradients).
+    vals: Vec<Real>,
 }
 
 /// One residual of a link: its value, weight, gradient along the units' points and along
@@ -388,8 +389,11 @@ impl Problem<'_> {
         // strip pieces no longer than their sheets let them be
         for (piece, cap) in &self.pieces {
             row.clear();
-            let length = self.piece_length(piece, x, units, grad.then_some(&mut row));
-            let over = (length - cap).max(0.0);
+            let over = (self.piece_length(piece, x, units) - cap).max(0.0);
+            if grad {
+                // the gradient only where the row weighs; its columns always (one pattern)
+                self.piece_gradient(piece, x, units, over > 0.0, &mut row);
+            }
             sink.row(&row.cols, &row.vals, over, W_LIMIT * on(over));
         }
         // vertices on the target
@@ -463,24 +467,24 @@ impl Problem<'_> {
                 for r in rows.iter_mut().filter(|r| r.kind != 2) {
                     r.w *= self.emphasis[li];
                 }
-                let vals = rows
-                    .iter()
-                    .map(|r| {
-                        let mut v = vec![0.0; cols.len()];
-                        if grad {
-                            for (q, gv) in r.grads.iter().enumerate() {
-                                let (side, p) = (q / 4, q % 4 + if r.hub_plates { 4 } else { 0 });
-                                if let Some(d) = &units[[f, g][side]].d {
-                                    for i in 0..INPUTS {
-                                        v[idx[side][i]] += gv.dot(&d[p][i]);
-                                    }
-                                }
+                // the gradients along the block's columns, one row after another (rows that
+                // do not weigh are left at zero: the assembly skips them)
+                let m = cols.len();
+                let mut vals = vec![0.0; if grad { rows.len() * m } else { 0 }];
+                for (r, v) in rows.iter().zip(vals.chunks_exact_mut(m.max(1))) {
+                    if r.w == 0.0 {
+                        continue;
+                    }
+                    for (q, gv) in r.grads.iter().enumerate() {
+                        let (side, p) = (q / 4, q % 4 + if r.hub_plates { 4 } else { 0 });
+                        if let Some(d) = &units[[f, g][side]].d {
+                            for i in 0..INPUTS {
+                                v[idx[side][i]] += gv.dot(&d[p][i]);
                             }
-                            v[cols.len() - 1] += r.ds / scale;
                         }
-                        v
-                    })
-                    .collect();
+                    }
+                    v[m - 1] += r.ds / scale;
+                }
                 LinkBlock { cols, rows, vals }
             })
             .collect();
@@ -488,8 +492,8 @@ impl Problem<'_> {
             if grad {
                 let block: Vec<(&[Real], Real, Real)> = rows
                     .iter()
-                    .zip(vals)
-                    .map(|(r, v)| (v.as_slice(), r.r, r.w))
+                    .zip(vals.chunks_exact(cols.len()))
+                    .map(|(r, v)| (v, r.r, r.w))
                     .collect();
                 sink.block(cols, &block);
             } else {
