@@ -46,6 +46,12 @@ pub const REACH_SAMPLES: usize = 17;
 /// Rows of [`reach_profile`]: the samples and the deepest point.
 pub const REACH_ROWS: usize = REACH_SAMPLES + 1;
 
+/// The weight of the excess depth of [`reach_profile`]'s deepest row: a slope for the solve
+/// where plates pass through each other, weak, so that it does not take over (saddle: 37
+/// welds left open without it, 9 / 3 / 7 / 12 at 0.01 / 0.03 / 0.1 / 0.3, and at 1 the hub
+/// laps fell short; docs/geometry.md 6.5).
+const EXCESS: Real = 0.03;
+
 /// Along the segment `p q`, the six lines (value at `p`, change from `p` to `q`) whose
 /// smallest is how deep a point lies in plate `a`: its depth inside each of `a`'s four
 /// sides (seen along `a`'s normal) and its clearance `thickness -+ height` from `a`'s
@@ -108,7 +114,10 @@ fn reach_peak(lines: &[(Real, Real); 6]) -> (Real, Real) {
 }
 
 /// How deep `p q` reaches into plate `a` (see [`reach_into`]) at [`REACH_SAMPLES`] points
-/// and at its deepest: rows for the solve.
+/// and at its deepest: rows for the solve. Where the segment passes through `a`'s
+/// mid-plane more than a thickness inside its outline, the reach stays at the thickness
+/// however deep it goes (no slope): the deepest row then adds [`EXCESS`] times the depth
+/// beyond the thickness there, so that the solve can pull it out.
 pub fn reach_profile(
     a: &[Point3; 4],
     p: &Point3,
@@ -123,11 +132,18 @@ pub fn reach_profile(
         depth.min(clear).max(0.0)
     };
     let peak = reach_peak(&lines).0;
+    // where the segment passes through the plate's mid-plane deeper inside its outline than
+    // a thickness, the reach is the thickness however deep: the excess gives it a slope
+    let (h, dh) = (thickness - lines[4].0, -lines[4].1);
+    let crossing = (dh.abs() > 1e-12)
+        .then(|| -h / dh)
+        .filter(|s| (0.0..=1.0).contains(s));
+    let excess = crossing.map_or(0.0, |s| (reach_at(&lines, s).0 - thickness).max(0.0));
     std::array::from_fn(|i| {
         if i < REACH_SAMPLES {
             row(i as Real / (REACH_SAMPLES - 1) as Real)
         } else {
-            row(peak)
+            row(peak) + EXCESS * excess
         }
     })
 }
@@ -309,6 +325,40 @@ mod tests {
             })
             .fold(0.0, Real::max);
         assert!((brute - exact).abs() < 1e-3, "{brute} {exact}");
+    }
+
+    #[test]
+    fn a_side_through_a_plate_deeper_than_a_thickness_has_a_slope_for_the_solve() {
+        // a 100 x 100 plate, 2.5 thick; a side through its mid-plane, 20 or 30 mm inside its
+        // outline (tilted so that it crosses the mid-plane there)
+        let a = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(100.0, 0.0, 0.0),
+            Point3::new(100.0, 100.0, 0.0),
+            Point3::new(0.0, 100.0, 0.0),
+        ];
+        let t = 2.5;
+        let through = |x: Real| (Point3::new(x, 0.0, -10.0), Point3::new(x, 100.0, 10.0));
+        let rows = |x: Real| {
+            let (p, q) = through(x);
+            (reach_into(&a, &p, &q, t), reach_profile(&a, &p, &q, t))
+        };
+        let ((r20, p20), (r30, p30)) = (rows(20.0), rows(30.0));
+        // the reach itself is the thickness either way
+        assert!(
+            (r20 - t).abs() < 1e-12 && (r30 - t).abs() < 1e-12,
+            "{r20} {r30}"
+        );
+        // the deepest row goes on growing with the depth where it crosses
+        let deepest = |r: &[Real; REACH_ROWS]| r[REACH_SAMPLES];
+        assert!(
+            (deepest(&p20) - (t + EXCESS * (20.0 - t))).abs() < 1e-9,
+            "{p20:?}"
+        );
+        assert!((deepest(&p30) - deepest(&p20) - EXCESS * 10.0).abs() < 1e-9);
+        // a side that only touches the plate, not through it, gets nothing added
+        let (p, q) = (Point3::new(20.0, 0.0, 3.0), Point3::new(20.0, 100.0, 3.0));
+        assert_eq!(reach_profile(&a, &p, &q, t), [0.0; REACH_ROWS]);
     }
 
     #[test]
