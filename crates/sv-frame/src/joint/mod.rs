@@ -60,7 +60,7 @@ pub struct JointOptions {
     pub max_iterations: usize,
     /// Iterations after the bridges the solve could not make are split (welded on site
     /// instead): only when there are such bridges, on top of `max_iterations`, per round
-    /// of splits (at most three).
+    /// of splits (at most three, each polished again as the legs' polish of the budget).
     pub split_iterations: usize,
     /// Largest distance of a vertex from its anchor plane (and line), as a fraction of the
     /// mean side.
@@ -518,23 +518,44 @@ pub fn close_joints(
         // the new welds weigh as welds from the start
         ne = NormalEquations::new(n);
     }
-    // the bridges the closing stages could not make (their iterations used up): the
-    // strips are split there, and the welds that take their place get a round of their own
-    // (a few rounds, as a round may leave a bridge beside them outside its limits)
-    for _ in 0..SPLIT_ROUNDS {
+    let mut rounds = 0;
+    loop {
+        // the legs made stiffer step by step, the rest as it was: where a unit sits near a
+        // singular pose (a nearly symmetric tile) its legs' last micrometre would otherwise
+        // cost a millimetre of plate move in the projection onto them
+        for legs in LEG_POLISH {
+            problem.legs = legs;
+            ne = NormalEquations::new(n);
+            let (used, u) = descend(
+                &mut problem,
+                &mut ne,
+                &mut x,
+                &mut poses,
+                polish / LEG_POLISH.len(),
+                &anchors_at,
+                &mut |it, e| progress(iterations + it, e),
+            )?;
+            iterations += used;
+            units = u;
+        }
+        // the bridges the solve could not make (its iterations used up): the strips are
+        // split there, and the welds that take their place get a round of their own, polished
+        // again (a few rounds, as a round may leave a bridge beside them outside its limits)
         let failing: Vec<(usize, JointRecord)> = problem
             .records(&x, &units)
             .into_iter()
             .enumerate()
             .filter(|(li, j)| problem.bridges[*li] && !problem.options.limits.bridge_holds(j))
             .collect();
-        if failing.is_empty() || options.split_iterations == 0 {
+        if failing.is_empty() || options.split_iterations == 0 || rounds == SPLIT_ROUNDS {
             break;
         }
+        rounds += 1;
         for (li, j) in failing {
             problem.bridges[li] = false;
             demoted.push((li, j));
         }
+        problem.legs = 1.0;
         ne = NormalEquations::new(n);
         let (used, u) = descend(
             &mut problem,
@@ -542,24 +563,6 @@ pub fn close_joints(
             &mut x,
             &mut poses,
             options.split_iterations,
-            &anchors_at,
-            &mut |it, e| progress(iterations + it, e),
-        )?;
-        iterations += used;
-        units = u;
-    }
-    // the legs made stiffer step by step, the rest as it was: where a unit sits near a
-    // singular pose (a nearly symmetric tile) its legs' last micrometre would otherwise
-    // cost a millimetre of plate move in the projection onto them
-    for legs in LEG_POLISH {
-        problem.legs = legs;
-        ne = NormalEquations::new(n);
-        let (used, u) = descend(
-            &mut problem,
-            &mut ne,
-            &mut x,
-            &mut poses,
-            polish / LEG_POLISH.len(),
             &anchors_at,
             &mut |it, e| progress(iterations + it, e),
         )?;
