@@ -471,18 +471,18 @@ pub fn close_joints(
     let mut iterations = 0;
     let mut ne = NormalEquations::new(n);
     let mut demoted = Vec::new();
-    let mut stage = 0;
     // the iterations of the stages; the rest are the legs' polish
     let polish = (LEG_POLISH.len() * POLISH_ITERATIONS).min(options.max_iterations / 4);
     let closing = options.max_iterations - polish;
-    loop {
+    for (stage, &stiffness) in STIFFNESS.iter().enumerate() {
         // the first stage (the joints closing) gets 40 % of the iterations, each later one
         // its share of the rest
-        let left = closing.saturating_sub(iterations);
         let budget = if stage == 0 {
             closing * 2 / 5
         } else {
-            left / (STIFFNESS.len() - stage).max(1)
+            problem.stiffness = stiffness;
+            ne = NormalEquations::new(n);
+            closing.saturating_sub(iterations) / (STIFFNESS.len() - stage)
         };
         let (used, u) = descend(
             &mut problem,
@@ -495,28 +495,6 @@ pub fn close_joints(
         )?;
         iterations += used;
         units = u;
-        if stage + 1 < STIFFNESS.len() {
-            stage += 1;
-            problem.stiffness = STIFFNESS[stage];
-            ne = NormalEquations::new(n);
-            continue;
-        }
-        // a bridge that cannot be made is where the strip ends: its joint is welded
-        let failing: Vec<(usize, JointRecord)> = problem
-            .records(&x, &units)
-            .into_iter()
-            .enumerate()
-            .filter(|(li, j)| problem.bridges[*li] && !problem.options.limits.bridge_holds(j))
-            .collect();
-        if failing.is_empty() || iterations >= closing {
-            break;
-        }
-        for (li, j) in failing {
-            problem.bridges[li] = false;
-            demoted.push((li, j));
-        }
-        // the new welds weigh as welds from the start
-        ne = NormalEquations::new(n);
     }
     let mut rounds = 0;
     loop {
@@ -541,12 +519,7 @@ pub fn close_joints(
         // the bridges the solve could not make (its iterations used up): the strips are
         // split there, and the welds that take their place get a round of their own, polished
         // again (a few rounds, as a round may leave a bridge beside them outside its limits)
-        let failing: Vec<(usize, JointRecord)> = problem
-            .records(&x, &units)
-            .into_iter()
-            .enumerate()
-            .filter(|(li, j)| problem.bridges[*li] && !problem.options.limits.bridge_holds(j))
-            .collect();
+        let failing = problem.failing_bridges(&x, &units);
         if failing.is_empty() || options.split_iterations == 0 || rounds == SPLIT_ROUNDS {
             break;
         }

@@ -699,6 +699,19 @@ impl Problem<'_> {
             .collect()
     }
 
+    /// The links still bridges whose joints at `x` are outside a bridge's limits.
+    pub(super) fn failing_bridges(
+        &self,
+        x: &[Real],
+        units: &[UnitPoints],
+    ) -> Vec<(usize, JointRecord)> {
+        self.records(x, units)
+            .into_iter()
+            .enumerate()
+            .filter(|(li, j)| self.bridges[*li] && !self.options.limits.bridge_holds(j))
+            .collect()
+    }
+
     /// Link `li`'s joint at its joint point in `x`, its units' primary plates at `a` and `b`.
     pub(super) fn record(
         &self,
