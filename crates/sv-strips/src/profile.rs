@@ -185,8 +185,18 @@ fn unit_cuts(
         angle: upright(d0.y.atan2(d0.x)),
         height,
     };
-    let mark =
-        face_mark(&hub, &label, face, p.min_web()).map_err(|why| unit_error(strip, unit, why))?;
+    // on a small hub plate the label moves up so that the mark fits under it
+    let raised = Label {
+        at: p2a(Point2::from(label.at) + up_of(&label) * 1.25 * MIN_FACE_MARK_RADIUS),
+        ..label.clone()
+    };
+    let (label, mark) = match face_mark(&hub, &label, face, p.min_web()) {
+        Ok(mark) => (label, mark),
+        Err(why) => match face_mark(&hub, &raised, face, p.min_web()) {
+            Ok(mark) => (raised, mark),
+            Err(_) => return Err(unit_error(strip, unit, why)),
+        },
+    };
     Ok(UnitCut {
         slots,
         folds,
@@ -195,19 +205,25 @@ fn unit_cuts(
     })
 }
 
+/// The direction up the page in a label's upright reading.
+fn up_of(label: &Label) -> Vector2 {
+    Vector2::new(-label.angle.sin(), label.angle.cos())
+}
+
 /// Smallest radius of a face mark (mm): below it a plasma etch is a blot.
 const MIN_FACE_MARK_RADIUS: f64 = 3.0;
 
-/// The face mark of a unit: a circle of half the label's height centred under the label
-/// (in its upright reading), half a radius below the text; smaller where the hub plate
-/// (`hub`, counter-clockwise) would not hold it `margin` inside every side.
+/// The face mark of a unit: a circle of half the label's height (at least
+/// [`MIN_FACE_MARK_RADIUS`]) centred under the label (in its upright reading), half a
+/// radius below the text; smaller where the hub plate (`hub`, counter-clockwise) would not
+/// hold it `margin` inside every side.
 fn face_mark(
     hub: &[Point2; 4],
     label: &Label,
     face: HubFace,
     margin: f64,
 ) -> Result<FaceMark, String> {
-    let up = Vector2::new(-label.angle.sin(), label.angle.cos());
+    let up = up_of(label);
     let c0 = Point2::new(label.at[0], label.at[1]);
     let half = label.height / 2.0;
     // centre at c0 - up (half + 1.5 r); side i (inward normal n) holds it when
@@ -223,15 +239,21 @@ fn face_mark(
         .iter()
         .filter(|&&(_, nu)| 1.0 + 1.5 * nu > 0.0)
         .map(|&(depth, nu)| (depth - half * nu - margin) / (1.0 + 1.5 * nu))
-        .fold(half, f64::min);
+        .fold(half.max(MIN_FACE_MARK_RADIUS), f64::min);
     let at = c0 - up * (half + 1.5 * radius);
     let fits = sides
         .iter()
         .all(|&(depth, nu)| depth - (half + 1.5 * radius) * nu >= radius + margin - 1e-9);
     if !(radius >= MIN_FACE_MARK_RADIUS && fits) {
+        let inradius = sides
+            .iter()
+            .map(|&(depth, _)| depth)
+            .fold(f64::INFINITY, f64::min);
         return Err(format!(
             "hub plate too small for a face mark of radius {MIN_FACE_MARK_RADIUS} mm \
-             {margin} mm inside it"
+             {margin} mm inside it under a {:.1} mm label: {:.1} mm from the label to the \
+             nearest side (a larger unit size or narrower legs and rim give larger hub plates)",
+            label.height, inradius
         ));
     }
     Ok(FaceMark {
@@ -460,6 +482,50 @@ mod tests {
     }
 
     #[test]
+    fn on_small_hub_plates_the_label_moves_up_so_that_the_mark_fits_under_it() {
+        // square tiles from 200 mm down to 40: wherever a unit can be cut, its mark lies a margin
+        // inside the hub plate and half a radius under its label; on the smallest the
+        // label left the plate's centre to make room
+        let p = ProfileParams::default();
+        let (mut raised, mut centred) = (0, 0);
+        for side in (40..=200).rev().step_by(2) {
+            let a = side as f64;
+            let tile = [
+                Point2::new(0.0, 0.0),
+                Point2::new(a, 0.0),
+                Point2::new(a, a),
+                Point2::new(0.0, a),
+            ];
+            let Ok(cut) = unit_cuts("A01", 0, "A01-01".into(), HubFace::Back, &tile, &p) else {
+                continue;
+            };
+            let hub = UnitLayout::new(&tile, &p.cut_widths()).unwrap().hub;
+            let (m, l) = (&cut.mark, &cut.label);
+            let c = Point2::new(m.at[0], m.at[1]);
+            assert!(
+                depth(&hub, c) >= m.radius + p.min_web() - 1e-9,
+                "{a}: {m:?}"
+            );
+            assert!(m.radius >= MIN_FACE_MARK_RADIUS, "{a}: {m:?}");
+            let below = (Point2::new(l.at[0], l.at[1]) - c).dot(&up_of(l));
+            assert!(
+                (below - (l.height / 2.0 + 1.5 * m.radius)).abs() < 1e-9,
+                "{a}"
+            );
+            let centre = Point2::from(hub.iter().fold(Vector2::zeros(), |s, v| s + v.coords) / 4.0);
+            if (Point2::new(l.at[0], l.at[1]) - centre).norm() > 1e-9 {
+                raised += 1;
+            } else {
+                centred += 1;
+            }
+        }
+        assert!(
+            raised > 0 && centred > 0,
+            "raised {raised}, centred {centred}"
+        );
+    }
+
+    #[test]
     fn the_face_mark_sits_under_the_label_inside_the_hub_plate() {
         // a skewed hub plate
         let hub = [
@@ -500,11 +566,23 @@ mod tests {
             (depth(&narrow, c) - (m.radius + 3.75)).abs() < 1e-9,
             "{m:?}"
         );
-        // no room at all: an error, not a mark on the cut
+        // a small label (4 mm) still gets a mark of the smallest radius that etches well
+        let small = Label {
+            height: 4.0,
+            at: [100.0, 130.0],
+            ..label.clone()
+        };
+        let m = face_mark(&narrow, &small, HubFace::Etched, 3.75).unwrap();
+        let c = Point2::new(m.at[0], m.at[1]);
+        assert_eq!(m.radius, MIN_FACE_MARK_RADIUS, "{m:?}");
+        assert!((130.0 - c.y - (2.0 + 1.5 * m.radius)).abs() < 1e-9, "{m:?}");
+        assert!(depth(&narrow, c) >= m.radius + 3.75);
+        // no room at all: an error that says how much there is, not a mark on the cut
         let label = Label {
             at: [100.0, 90.0],
             ..label
         };
-        assert!(face_mark(&narrow, &label, HubFace::Etched, 3.75).is_err());
+        let why = face_mark(&narrow, &label, HubFace::Etched, 3.75).unwrap_err();
+        assert!(why.contains("15.0 mm from the label"), "{why}");
     }
 }
