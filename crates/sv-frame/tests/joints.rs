@@ -286,3 +286,28 @@ fn bridges_the_budget_cannot_make_are_split_and_welded() {
         open
     );
 }
+
+#[test]
+fn hubs_held_apart_do_not_shrink_the_tiles_below_the_floor() {
+    // a lap of -100 mm asked for at every link (hubs held apart): the solve would shrink
+    // the tiles, their hub plates with them (to 0.69 without the floor); it keeps every
+    // half-diagonal at 0.8 of the hub's or more (a little less where the polish and the
+    // legs' projection move it)
+    let (mesh, solved) = solved_cap();
+    let bridges: Vec<bool> = solved.links.iter().map(|l| l.slots[0] % 2 == 0).collect();
+    let options = JointOptions {
+        max_iterations: 40,
+        min_overlap: 0.0,
+        overlap: Some(-100.0),
+        ..Default::default()
+    };
+    let (_, closed, _) = close_joints(&mesh, &solved, &Sphere, &bridges, &options, &mut |_, _| {})
+        .expect("joint solve");
+    let smallest = closed
+        .scales
+        .iter()
+        .flatten()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    assert!(smallest >= 0.8 - 0.01, "a tile scaled to {smallest}");
+}

@@ -44,6 +44,10 @@ pub(super) const EMPHASIS_MAX: Real = 100.0;
 pub(super) const EDGE_RATIO: Real = 1.2;
 /// Hub laps are pushed up to this much above the weld minimum (mm).
 pub(super) const LAP_MARGIN: Real = 1.0;
+/// The smallest a tile's half-diagonal may be scaled in the solve. Small units (150 mm)
+/// were shrunk to less than half until their hub plates could not be cut (no room for a
+/// label and its face mark); at 200-300 mm no scale falls below 0.87.
+pub(super) const MIN_TILE_SCALE: Real = 0.8;
 
 /// 1 where a one-sided residual acts, else 0 (its row stays, with weight 0, so that every
 /// assembly has the same pattern).
@@ -379,10 +383,13 @@ impl Problem<'_> {
                 }
                 sink.row(&row.cols, &row.vals, u.legs[j], W_LEG * self.legs);
             }
-            // the tile's scales and the hub's lift: free, but not for nothing
+            // the tile's scales and the hub's lift: free, but not for nothing; a tile no
+            // smaller than MIN_TILE_SCALE, so that its hub plate can still be cut
             let c = self.pose_column(f);
             for i in 7..9 {
                 sink.row(&[c + i], &[1.0], x[c + i], W_SCALE);
+                let short = ((MIN_TILE_SCALE - 1.0) * scale - x[c + i]).max(0.0);
+                sink.row(&[c + i], &[-1.0], short, W_LIMIT * on(short));
             }
             sink.row(&[c + 9], &[1.0], x[c + 9], W_LIFT);
         }
