@@ -662,17 +662,14 @@ fn joint_rows(
         b.bridge_twist.to_degrees()
     );
     if !j.splits.is_empty() {
-        let id = |u: usize| frame.units.get(u).map_or("?", |r| r.id.as_str());
         let named: Vec<String> = j
             .splits
             .iter()
             .take(3)
             .filter_map(|(l, r)| {
-                let [f, g] = frame.links.get(*l)?.units;
                 Some(format!(
-                    "{} - {} apart {} mm, bent {:.1} deg",
-                    id(f),
-                    id(g),
+                    "{} apart {} mm, bent {:.1} deg",
+                    link_name(frame, frame.links.get(*l)?.units),
                     number(r.gap),
                     r.bend.abs().to_degrees()
                 ))
@@ -702,6 +699,12 @@ fn joint_rows(
     ]
 }
 
+/// A link as the summary names it: its two units' ids, `A01-02 - A03-02`.
+fn link_name(frame: &sv_frame::FrameFile, units: [usize; 2]) -> String {
+    let id = |u: usize| frame.units.get(u).map_or("?", |r| r.id.as_str());
+    format!("{} - {}", id(units[0]), id(units[1]))
+}
+
 /// The summary's row of the joints outside their limits: how many of each kind, the worst
 /// three by their excess over the limit (naming the units), and what would help.
 fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
@@ -716,14 +719,12 @@ fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
         let Some(j) = l.joint else { continue };
         let strip = |u: usize| frame.units.get(u).map(|r| r.strip.as_str());
         if j.kind == sv_frame::JointKind::Bridge && strip(l.units[0]) != strip(l.units[1]) {
-            let id = |u: usize| frame.units.get(u).map_or("?", |r| r.id.as_str());
-            cut.push(format!("{} - {}", id(l.units[0]), id(l.units[1])));
+            cut.push(link_name(frame, l.units));
         }
         if limits.holds(&j) {
             continue;
         }
-        let id = |u: usize| frame.units.get(u).map_or("?", |r| r.id.as_str());
-        let name = format!("{} - {}", id(l.units[0]), id(l.units[1]));
+        let name = link_name(frame, l.units);
         match j.kind {
             sv_frame::JointKind::Bridge => bridges += 1,
             sv_frame::JointKind::Weld => welds += 1,

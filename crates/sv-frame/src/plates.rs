@@ -295,12 +295,7 @@ mod tests {
     fn the_reach_is_the_exact_largest_not_the_largest_sample() {
         // a 100 x 100 plate; a long segment in its plane that cuts across its corner
         // (100, 0): 1 mm deep at (99, 1), between the samples
-        let a = [
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(100.0, 0.0, 0.0),
-            Point3::new(100.0, 100.0, 0.0),
-            Point3::new(0.0, 100.0, 0.0),
-        ];
+        let a = square(0.0, 0.0).map(|p| Point3::from(p.coords * 100.0));
         let (p, q) = (
             Point3::new(-103.0, -201.0, 0.0),
             Point3::new(101.0, 3.0, 0.0),
@@ -331,12 +326,7 @@ mod tests {
     fn a_side_through_a_plate_deeper_than_a_thickness_has_a_slope_for_the_solve() {
         // a 100 x 100 plate, 2.5 thick; a side through its mid-plane, 20 or 30 mm inside its
         // outline (tilted so that it crosses the mid-plane there)
-        let a = [
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(100.0, 0.0, 0.0),
-            Point3::new(100.0, 100.0, 0.0),
-            Point3::new(0.0, 100.0, 0.0),
-        ];
+        let a = square(0.0, 0.0).map(|p| Point3::from(p.coords * 100.0));
         let t = 2.5;
         let through = |x: Real| (Point3::new(x, 0.0, -10.0), Point3::new(x, 100.0, 10.0));
         let rows = |x: Real| {

@@ -45,25 +45,38 @@ fn solved_cap() -> (QuadMesh, sv_frame::Solved) {
     (mesh, solved)
 }
 
+/// Strips along one direction: the links across sides 0 and 2 are bridges.
+fn row_bridges(solved: &sv_frame::Solved) -> Vec<bool> {
+    solved.links.iter().map(|l| l.slots[0] % 2 == 0).collect()
+}
+
+/// The cap's joints closed with `options`, the strips along [`row_bridges`].
+fn close_rows(
+    mesh: &QuadMesh,
+    solved: &sv_frame::Solved,
+    options: &JointOptions,
+) -> (QuadMesh, sv_frame::Solved, sv_frame::JointReport) {
+    close_joints(
+        mesh,
+        solved,
+        &Sphere,
+        &row_bridges(solved),
+        options,
+        &mut |_, _| {},
+    )
+    .expect("joint solve")
+}
+
 #[test]
 fn closed_joints_keep_the_legs_exact_and_the_vertices_on_the_surface() {
     let (mesh, solved) = solved_cap();
-    // strips along one direction: the links across sides 0 and 2 are bridges
-    let bridges: Vec<bool> = solved.links.iter().map(|l| l.slots[0] % 2 == 0).collect();
+    let bridges = row_bridges(&solved);
     let joint_options = JointOptions {
         max_iterations: 60,
         min_overlap: 0.0,
         ..Default::default()
     };
-    let (closed_mesh, closed, report) = close_joints(
-        &mesh,
-        &solved,
-        &Sphere,
-        &bridges,
-        &joint_options,
-        &mut |_, _| {},
-    )
-    .expect("joint solve");
+    let (closed_mesh, closed, report) = close_rows(&mesh, &solved, &joint_options);
     assert!(
         report.iterations <= 60 && report.iterations > 0,
         "{report:?}"
@@ -174,7 +187,6 @@ fn closed_joints_keep_the_legs_exact_and_the_vertices_on_the_surface() {
 #[test]
 fn a_constant_overlap_gives_every_hub_lap_one_length() {
     let (mesh, solved) = solved_cap();
-    let plan: Vec<bool> = solved.links.iter().map(|l| l.slots[0] % 2 == 0).collect();
     let spread = |laps: &[f64]| {
         let lo = laps.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = laps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -186,8 +198,7 @@ fn a_constant_overlap_gives_every_hub_lap_one_length() {
             overlap,
             ..Default::default()
         };
-        let (m, f, _) =
-            close_joints(&mesh, &solved, &Sphere, &plan, &o, &mut |_, _| {}).expect("joint solve");
+        let (m, f, _) = close_rows(&mesh, &solved, &o);
         f.to_frame_file(&m)
     };
     let free = close(None);
@@ -221,7 +232,7 @@ fn a_constant_overlap_gives_every_hub_lap_one_length() {
 #[test]
 fn bridges_the_budget_cannot_make_are_split_and_welded() {
     let (mesh, solved) = solved_cap();
-    let bridges: Vec<bool> = solved.links.iter().map(|l| l.slots[0] % 2 == 0).collect();
+    let bridges = row_bridges(&solved);
     // a web that hardly twists: not every bridge can be made
     let d = JointOptions::default();
     let tight = JointOptions {
@@ -245,15 +256,7 @@ fn bridges_the_budget_cannot_make_are_split_and_welded() {
         split_iterations: 0,
         ..tight.clone()
     };
-    let (_, unsplit, plain) = close_joints(
-        &mesh,
-        &solved,
-        &Sphere,
-        &bridges,
-        &unsplit_options,
-        &mut |_, _| {},
-    )
-    .expect("joint solve");
+    let (_, unsplit, plain) = close_rows(&mesh, &solved, &unsplit_options);
     let open = failing(&unsplit);
     assert!(!open.is_empty(), "every bridge made");
     assert!(
@@ -261,9 +264,7 @@ fn bridges_the_budget_cannot_make_are_split_and_welded() {
         "{plain:?}"
     );
 
-    let (_, split, report) =
-        close_joints(&mesh, &solved, &Sphere, &bridges, &tight, &mut |_, _| {})
-            .expect("joint solve");
+    let (_, split, report) = close_rows(&mesh, &solved, &tight);
     // the split bridges were bridges outside their limits, and are welds now
     assert!(!report.splits.is_empty());
     let records = &split.joints.as_ref().expect("joints").records;
@@ -294,15 +295,13 @@ fn hubs_held_apart_do_not_shrink_the_tiles_below_the_floor() {
     // half-diagonal at 0.8 of the hub's or more (a little less where the polish and the
     // legs' projection move it)
     let (mesh, solved) = solved_cap();
-    let bridges: Vec<bool> = solved.links.iter().map(|l| l.slots[0] % 2 == 0).collect();
     let options = JointOptions {
         max_iterations: 40,
         min_overlap: 0.0,
         overlap: Some(-100.0),
         ..Default::default()
     };
-    let (_, closed, _) = close_joints(&mesh, &solved, &Sphere, &bridges, &options, &mut |_, _| {})
-        .expect("joint solve");
+    let (_, closed, _) = close_rows(&mesh, &solved, &options);
     let smallest = closed
         .scales
         .iter()

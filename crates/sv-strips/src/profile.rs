@@ -185,17 +185,18 @@ fn unit_cuts(
         angle: upright(d0.y.atan2(d0.x)),
         height,
     };
-    // on a small hub plate the label moves up so that the mark fits under it
-    let raised = Label {
-        at: p2a(Point2::from(label.at) + up_of(&label) * 1.25 * MIN_FACE_MARK_RADIUS),
-        ..label.clone()
-    };
     let (label, mark) = match face_mark(&hub, &label, face, p.min_web()) {
         Ok(mark) => (label, mark),
-        Err(why) => match face_mark(&hub, &raised, face, p.min_web()) {
-            Ok(mark) => (raised, mark),
-            Err(_) => return Err(unit_error(strip, unit, why)),
-        },
+        Err(why) => {
+            // on a small hub plate the label moves up so that the mark fits under it
+            let raised = Label {
+                at: p2a(Point2::from(label.at) + up_of(&label) * 1.25 * MIN_FACE_MARK_RADIUS),
+                ..label
+            };
+            let mark = face_mark(&hub, &raised, face, p.min_web())
+                .map_err(|_| unit_error(strip, unit, why))?;
+            (raised, mark)
+        }
     };
     Ok(UnitCut {
         slots,

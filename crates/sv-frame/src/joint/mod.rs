@@ -198,18 +198,20 @@ fn unit_error(f: usize, e: UnitFailure) -> FrameError {
 }
 
 /// Levenberg-Marquardt on `problem` from `x` (plates at `poses`) for at most `budget`
-/// iterations: steps within a trust region of MAX_STEP of the side, the anchors taken again
-/// after every step; where it stalls, the joints outside their limits weigh more and it goes
-/// on. Returns the iterations used and the units at the end.
+/// iterations, on normal equations of its own: steps within a trust region of MAX_STEP of
+/// the side, the anchors taken again after every step; where it stalls, the joints outside
+/// their limits weigh more and it goes on. Adds the iterations used to `done` (progress is
+/// reported from there) and returns the units at the end.
 fn descend(
     problem: &mut Problem<'_>,
-    ne: &mut NormalEquations,
     x: &mut Vec<Real>,
     poses: &mut Vec<PlatePose>,
     budget: usize,
     anchors_at: &(dyn Fn(&[Real]) -> Vec<Anchor> + Sync),
+    done: &mut usize,
     progress: &mut dyn FnMut(usize, Real),
-) -> Result<(usize, Vec<UnitPoints>), FrameError> {
+) -> Result<Vec<UnitPoints>, FrameError> {
+    let mut ne = NormalEquations::new(x.len());
     let nf = problem.faces.len();
     let moves = 3 * problem.nv + UNIT_COLUMNS * nf;
     let scale = problem.model.scale;
@@ -223,7 +225,7 @@ fn descend(
     while iterations < budget {
         iterations += 1;
         ne.reset(1e-9);
-        problem.visit(x, &units, ne);
+        problem.visit(x, &units, &mut ne);
         let mut accepted = None;
         for _ in 0..40 {
             if !ne
@@ -268,7 +270,7 @@ fn descend(
                     .units(x, poses, true)
                     .map_err(|(f, e)| unit_error(f, e))?;
                 energy = problem.energy(x, &units);
-                progress(iterations, energy);
+                progress(*done + iterations, energy);
                 gain
             }
             None => 0.0,
@@ -282,7 +284,8 @@ fn descend(
             lambda = 1e-4;
         }
     }
-    Ok((iterations, units))
+    *done += iterations;
+    Ok(units)
 }
 
 /// The chart coordinates of a pose: the rotation's angle `theta` and its axis' tilt `phi`
@@ -469,7 +472,6 @@ pub fn close_joints(
     }
     let start = problem.figures(&x, &units);
     let mut iterations = 0;
-    let mut ne = NormalEquations::new(n);
     let mut demoted = Vec::new();
     // the iterations of the stages; the rest are the legs' polish
     let polish = (LEG_POLISH.len() * POLISH_ITERATIONS).min(options.max_iterations / 4);
@@ -481,20 +483,17 @@ pub fn close_joints(
             closing * 2 / 5
         } else {
             problem.stiffness = stiffness;
-            ne = NormalEquations::new(n);
             closing.saturating_sub(iterations) / (STIFFNESS.len() - stage)
         };
-        let (used, u) = descend(
+        units = descend(
             &mut problem,
-            &mut ne,
             &mut x,
             &mut poses,
             budget,
             &anchors_at,
-            &mut |it, e| progress(iterations + it, e),
+            &mut iterations,
+            progress,
         )?;
-        iterations += used;
-        units = u;
     }
     let mut rounds = 0;
     loop {
@@ -503,18 +502,15 @@ pub fn close_joints(
         // cost a millimetre of plate move in the projection onto them
         for legs in LEG_POLISH {
             problem.legs = legs;
-            ne = NormalEquations::new(n);
-            let (used, u) = descend(
+            units = descend(
                 &mut problem,
-                &mut ne,
                 &mut x,
                 &mut poses,
                 polish / LEG_POLISH.len(),
                 &anchors_at,
-                &mut |it, e| progress(iterations + it, e),
+                &mut iterations,
+                progress,
             )?;
-            iterations += used;
-            units = u;
         }
         // the bridges the solve could not make (its iterations used up): the strips are
         // split there, and the welds that take their place get a round of their own, polished
@@ -529,18 +525,15 @@ pub fn close_joints(
             demoted.push((li, j));
         }
         problem.legs = 1.0;
-        ne = NormalEquations::new(n);
-        let (used, u) = descend(
+        units = descend(
             &mut problem,
-            &mut ne,
             &mut x,
             &mut poses,
             options.split_iterations,
             &anchors_at,
-            &mut |it, e| progress(iterations + it, e),
+            &mut iterations,
+            progress,
         )?;
-        iterations += used;
-        units = u;
     }
     let end = problem.figures(&x, &units);
     // the new frame: hubs from the new mesh, each unit's pose on its hub projected onto its
