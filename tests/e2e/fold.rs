@@ -95,6 +95,7 @@ fn the_default_build_folds_from_its_dxf_as_our_own_code_measures_it() {
         "bridge length folded - flat",
         "bridge bent in its plane",
         "bridge twisted",
+        "bridge: plates into each other across the slot",
         "units that cannot be rebuilt from their cut",
         "hub plates at a lap into each other",
     ] {
@@ -117,7 +118,8 @@ fn worst(out: &crate::util::Output, name: &str) -> f64 {
         .unwrap_or_else(|| panic!("no figure in row {name}: {out:?}"))
 }
 
-/// `spinvalence check`'s worst hub lap, weld gap, reach, hub plates into each other and
+/// `spinvalence check`'s worst hub lap, weld gap, reach (between strips and across a
+/// bridge's slot), hub plates into each other and
 /// widest gap between lapping hub plates are the fold check's, 0.1 mm.
 fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
     for (name, ours) in [
@@ -126,6 +128,10 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
         (
             "plates of neighbouring strips reach into each other",
             "reach_max",
+        ),
+        (
+            "bridge: plates into each other across the slot",
+            "bridge_reach_max",
         ),
         ("hub plates at a lap into each other", "hub_stack_lift_max"),
         (
@@ -155,8 +161,9 @@ fn joints_hold(what: &str, fig: &Value) {
     assert!(f(fig, "hub_stack_lift_max") <= 0.1, "{what}: {fig}");
 }
 
-/// Every bridge in the strips, found by our code in the DXF outlines, spans its joint and
-/// bends and twists within its limits.
+/// Every bridge in the strips, found by our code in the DXF outlines, spans its joint,
+/// bends and twists within its limits, and its two plates stay clear of each other across
+/// the joint slot.
 fn bridges_hold(what: &str, fig: &Value) {
     assert!(f(fig, "bridges_checked") > 0.0, "{what}: {fig}");
     assert_eq!(
@@ -164,6 +171,8 @@ fn bridges_hold(what: &str, fig: &Value) {
         "{what}: {fig}"
     );
     assert!(f(fig, "bridge_span_max") <= 0.5, "{what}: {fig}");
+    // turned in their plane, the plates would meet across the slot away from the bridge
+    assert!(f(fig, "bridge_reach_max") <= 0.1, "{what}: {fig}");
     assert!(f(fig, "bridge_bend_limit_deg") <= 5.0, "{what}: {fig}");
     assert!(
         f(fig, "bridge_bend_max_deg") <= f(fig, "bridge_bend_limit_deg"),

@@ -30,7 +30,9 @@ Checks
      its mid-plane: <= 1.5 mm, and within 0.1 mm of links[].joint.gap.
   6. collisions: how far each facing edge of two strips' plates reaches into the
      other plate (depth inside its outline and inside its slab t either side,
-     the smaller; the exact largest along the edge): <= 0.1 mm.
+     the smaller; the exact largest along the edge): <= 0.1 mm.  The same across
+     every bridge's joint slot: two plates of one strip turned in their plane meet
+     at the end of their sides away from the bridge.
   7. hub plates at their laps lie one on the other: over the overlap of the two
      hub plates (seen along one's normal) the height of one mid-plane over the
      other stays >= t (or <= -t); how far from it, <= 0.1 mm.  Informational:
@@ -824,6 +826,8 @@ def main(argv=None):
     welds = []               # (where, gap at the joint point, |gap - joint.gap|)
     reach = (0.0, None)      # deepest reach of one plate into another, between strips
     reach_fail = []
+    rim_reach = (0.0, None)  # ... and of one plate into the next of its strip, across a bridge
+    rim_fail = []
     for li, lk in enumerate(links):
         f, g = lk["units"]
         where = "%s~%s" % (uid[f], uid[g])
@@ -889,12 +893,23 @@ def main(argv=None):
             gap_claim_err = max(gap_claim_err, abs(dd - claimed))
         if gap_max[1] is None or gap > gap_max[0]:
             gap_max = (gap, where)
-        # ---- checks 5 and 6: plates of neighbouring strips, as cut, thickness included
-        if strip_of[f] == strip_of[g] or cut_plate[f] is None or cut_plate[g] is None:
+        # ---- checks 5 and 6: neighbouring plates, as cut, thickness included
+        if cut_plate[f] is None or cut_plate[g] is None:
             continue
         qf = np.array([apply(pri_mot[f], p) for p in cut_plate[f][0]])
         qg = np.array([apply(pri_mot[g], p) for p in cut_plate[g][0]])
         pf_, pg_ = plate_frame(qf), plate_frame(qg)
+        # no plate reaches into its neighbour: the facing edge of each, all along; in one
+        # strip across the bridge's joint slot (turned in their plane, the two rims meet at
+        # the end of the side away from the bridge)
+        deep = max(segment_reach(qg[sb], qg[(sb + 1) % 4], pf_, thickness),
+                   segment_reach(qf[sa], qf[(sa + 1) % 4], pg_, thickness))
+        if strip_of[f] == strip_of[g]:
+            if rim_reach[1] is None or deep > rim_reach[0]:
+                rim_reach = (deep, where)
+            if deep > REACH_TOL:
+                rim_fail.append(where)
+            continue
         # welded at the joint point frame.json gives (links[].joint.along on f's facing
         # side), else where the facing edges come closest
         jt = lk.get("joint") or {}
@@ -908,9 +923,6 @@ def main(argv=None):
             wg = min(plate_gap(x, pg_, thickness) for x in np.linspace(qf[sa], qf[(sa + 1) % 4], 65))
         ce = abs(wg - float(jt["gap"])) if "gap" in jt else float("inf")
         welds.append((where, wg, ce))
-        # no plate reaches into its neighbour: the facing edge of each, all along
-        deep = max(segment_reach(qg[sb], qg[(sb + 1) % 4], pf_, thickness),
-                   segment_reach(qf[sa], qf[(sa + 1) % 4], pg_, thickness))
         if reach[1] is None or deep > reach[0]:
             reach = (deep, where)
         if deep > REACH_TOL:
@@ -954,6 +966,8 @@ def main(argv=None):
         weld_claim[0] or "-", weld_claim[2] <= LAP_CLAIM_TOL)
     row("plates of two strips into each other (mm)", "%.3g" % reach[0], "<= %g" % REACH_TOL, reach[1] or "-",
         not reach_fail)
+    row("bridge: plates into each other across the slot (mm)", "%.3g" % rim_reach[0],
+        "<= %g" % REACH_TOL, rim_reach[1] or "-", not rim_fail)
     row("hub plates at a lap into each other (mm)", "%.3g" % stack_lift[0], "<= %g" % REACH_TOL,
         stack_lift[1] or "-", not stack_fail)
     row("DXF topology (slots/necks)", "%d problems" % len(struct), "0",
@@ -981,6 +995,7 @@ def main(argv=None):
     for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
                       ("hub lap", lap_fail), ("lap claim", claim_fail), ("bridge", bridge_fail),
                       ("weld", weld_fail), ("plates into each other", reach_fail),
+                      ("plates across a bridge's slot", rim_fail),
                       ("hub plates into each other", stack_fail)):
         if lst:
             print("FAIL %s: %d: %s%s" % (name, len(lst), ", ".join(lst[:10]), " ..." if len(lst) > 10 else ""))
@@ -1014,11 +1029,13 @@ def main(argv=None):
             "weld_gap_max": weld_w[1],
             "weld_claim_error_max": weld_claim[2],
             "reach_max": reach[0],
+            "bridge_reach_max": rim_reach[0],
             "hub_stack_lift_max": stack_lift[0],
             "hub_stack_gap_max": stack_gap[0],
             "problems": ["%s: %s: %s" % p for p in struct],
             "failing": {"leg": leg_fail, "pin": pin_fail, "lap": lap_fail, "lap_claim": claim_fail,
                         "bridge": bridge_fail, "weld": weld_fail, "reach": reach_fail,
+                        "bridge_reach": rim_fail,
                         "hub_stack": stack_fail},
             "ok": bool(ok),
             "worst": {"leg_error": leg_err[1], "pin_offset": pin_off[1],

@@ -688,7 +688,8 @@ fn joint_rows(
         vec![
             "welds (between strips)".into(),
             format!(
-                "apart {} -> {} mm, plates into each other {} -> {} mm ({} iterations)",
+                "apart {} -> {} mm, plates into each other (here and across bridges' slots) {} -> {} \
+                 mm ({} iterations)",
                 number(a.weld_gap),
                 number(b.weld_gap),
                 number(a.collision),
@@ -743,7 +744,12 @@ fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
                 format!("twisted {:.1} deg", j.twist.abs().to_degrees())
             }
             sv_frame::JointMeasure::Collision => {
-                format!("{} mm into each other", number(j.collision))
+                let across = if j.kind == sv_frame::JointKind::Bridge {
+                    " across the slot"
+                } else {
+                    ""
+                };
+                format!("{} mm into each other{across}", number(j.collision))
             }
         };
         open.push((excess, format!("{name} {what}")));

@@ -82,7 +82,7 @@ impl JointLimits {
     /// The joint is within these limits.
     pub fn holds(&self, j: &JointRecord) -> bool {
         match j.kind {
-            JointKind::Bridge => self.bridge_holds(j),
+            JointKind::Bridge => self.bridge_holds(j) && j.collision <= self.collision,
             JointKind::Weld => j.gap <= self.weld_gap && j.collision <= self.collision,
         }
     }

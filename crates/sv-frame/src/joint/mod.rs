@@ -747,3 +747,50 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod bridge_tests {
+    use super::problem::joint_record;
+    use crate::JointKind;
+    use sv_geom::{Point3, Real};
+
+    /// Two 300 mm tiles of one strip side by side in one plane, joined by a bridge 15 mm
+    /// from the end of their common side; the second turned by `deg` in the plane about
+    /// the bridge. Their plates are cut back 1.875 mm (half a 3.75 mm joint slot) there.
+    fn rims_into_each_other(deg: Real) -> Real {
+        let a = [(0.0, 0.0), (300.0, 0.0), (300.0, 300.0), (0.0, 300.0)]
+            .map(|(x, y)| Point3::new(x, y, 0.0));
+        let w = Point3::new(300.0, 15.0, 0.0);
+        let (s, c) = deg.to_radians().sin_cos();
+        let b = [(300.0, 0.0), (600.0, 0.0), (600.0, 300.0), (300.0, 300.0)].map(|(x, y)| {
+            let (dx, dy) = (x - w.x, y - w.y);
+            Point3::new(w.x + c * dx - s * dy, w.y + s * dx + c * dy, 0.0)
+        });
+        let half = 1.875;
+        let r = joint_record(
+            [&a, &b],
+            [[0.0, half, 0.0, 0.0], [0.0, 0.0, 0.0, half]],
+            [1, 3],
+            0.05,
+            JointKind::Bridge,
+            2.5,
+        );
+        assert!(r.gap < 1e-9, "the bridge spans its joint: {r:?}");
+        r.collision
+    }
+
+    #[test]
+    fn a_bridge_turned_in_its_plane_is_clear_until_its_slot_closes_at_the_far_end() {
+        // the far end of the side is 285 mm from the bridge: the 3.75 mm slot closes at
+        // atan(3.75 / 285) = 0.75 deg turned towards the first tile
+        assert_eq!(rims_into_each_other(0.0), 0.0);
+        assert_eq!(rims_into_each_other(0.7), 0.0);
+        // beyond, the rims overlap in one plane, the far corner as deep as it passed the
+        // closed slot (285 sin 0.8 deg - 3.75 = 0.23 mm), at most a whole thickness
+        let just = rims_into_each_other(0.8);
+        assert!(0.1 < just && just < 0.3, "{just}");
+        assert!((rims_into_each_other(2.0) - 2.5).abs() < 1e-9);
+        // turned the other way the slot opens there
+        assert_eq!(rims_into_each_other(-2.0), 0.0);
+    }
+}

@@ -111,8 +111,8 @@ impl Sink for Energy {
 }
 
 /// Rows of a link's primary plates: the joint point's offset (3), its room on both sides
-/// (2), bend, twist, turn beyond the limits, and at a weld the reach of each side into the
-/// other plate at every sample and at its deepest.
+/// (2), bend, twist, turn beyond the limits, and the reach of each side into the other
+/// plate (at a bridge across its joint slot) at every sample and at its deepest.
 pub(super) const ROWS: usize = 8 + 2 * REACH_ROWS;
 
 /// One link's rows over its columns (both units' inputs and its joint parameter), with
@@ -188,7 +188,7 @@ pub(super) struct Problem<'a> {
     pub(super) pieces: Vec<(Piece, Real)>,
     /// Per link: the weight of its joint, raised where the joint stays outside its limits.
     pub(super) emphasis: Vec<Real>,
-    /// How far the welds' no-collision and side-by-side rows weigh (0 to 1): they come in
+    /// How far the plates' no-collision rows weigh (0 to 1): they come in
     /// gradually, once the joints have closed, so that they do not lock the start.
     pub(super) stiffness: Real,
     /// A factor on the legs' weight: raised at the end, so that the legs hold to far below
@@ -603,8 +603,8 @@ impl Problem<'_> {
         // the primary plates: the joint at `s` along f's side, inside both sides by the
         // bridge's room; at a bridge g's side runs through it (the fold line) without
         // turning in f's plane and twisting within its limit; at a weld the two plates touch
-        // there (edge to edge or edge on face, thickness included), reach nowhere into each
-        // other, and run side by side
+        // there (edge to edge or edge on face, thickness included); either way the plates as
+        // cut reach nowhere into each other
         let pts: [Point3; 8] = std::array::from_fn(|i| units[i / 4].points[i % 4]);
         let room = if bridge { o.bridge_room } else { 0.0 };
         let th = o.thickness;
@@ -625,13 +625,11 @@ impl Problem<'_> {
             let off = (w - b[m]) - gh * t;
             let flen = fv.norm();
             let fh = fv / flen;
-            // a weld's plates are cut back where their bridges join (their sides' ends
-            // move in): the joint point stays on both plates as cut
-            let (ac, bc) = if bridge {
-                (a, b)
-            } else {
-                (plate_as_cut(&a, insets[0]), plate_as_cut(&b, insets[1]))
-            };
+            // the plates are cut back half the joint slot where bridges join (their sides'
+            // ends move in): a weld's joint point stays on both plates as cut, a bridge's
+            // on its tiles' sides (the fold line)
+            let (pa, pb) = (plate_as_cut(&a, insets[0]), plate_as_cut(&b, insets[1]));
+            let (ac, bc) = if bridge { (a, b) } else { (pa, pb) };
             let (f_lo, f_hi) = ((ac[k] - a[k]).dot(&fh), (a[k1] - ac[k1]).dot(&fh));
             let (g_lo, g_hi) = ((bc[m] - b[m]).dot(&gh), (b[m1] - bc[m1]).dot(&gh));
             let out_f = (room + f_lo - s * flen)
@@ -656,9 +654,11 @@ impl Problem<'_> {
                         0.0
                     },
             ]);
-            if !bridge && stiff {
-                r[8..8 + REACH_ROWS].copy_from_slice(&reach_profile(&ac, &bc[m], &bc[m1], th));
-                r[8 + REACH_ROWS..].copy_from_slice(&reach_profile(&bc, &ac[k], &ac[k1], th));
+            // no plate reaches into the other: at a weld anywhere, at a bridge across the
+            // joint slot (turned in their plane, the rims meet at the end away from it)
+            if stiff {
+                r[8..8 + REACH_ROWS].copy_from_slice(&reach_profile(&pa, &pb[m], &pb[m1], th));
+                r[8 + REACH_ROWS..].copy_from_slice(&reach_profile(&pb, &pa[k], &pa[k1], th));
             }
             r
         };
@@ -815,11 +815,9 @@ impl Problem<'_> {
                     fig.bridge_bend = fig.bridge_bend.max(j.bend.abs());
                     fig.bridge_twist = fig.bridge_twist.max(j.twist.abs());
                 }
-                JointKind::Weld => {
-                    fig.weld_gap = fig.weld_gap.max(j.gap);
-                    fig.collision = fig.collision.max(j.collision);
-                }
+                JointKind::Weld => fig.weld_gap = fig.weld_gap.max(j.gap),
             }
+            fig.collision = fig.collision.max(j.collision);
         }
         fig
     }
@@ -841,16 +839,12 @@ pub(crate) fn joint_record(
     let w = a[k] + (a[k1] - a[k]) * s;
     let on_b = segment_closest(&w, &w, &b[m], &b[m1]);
     let (bend, twist) = hinge_turn(a, k, b, m);
-    let (gap, collision) = match kind {
-        JointKind::Bridge => (on_b.distance, 0.0),
-        JointKind::Weld => {
-            let (ac, bc) = (plate_as_cut(a, insets[0]), plate_as_cut(b, insets[1]));
-            (
-                edge_to_plate(&ac, &w, &bc, thickness).norm(),
-                reach_into(&ac, &bc[m], &bc[m1], thickness)
-                    .max(reach_into(&bc, &ac[k], &ac[k1], thickness)),
-            )
-        }
+    let (ac, bc) = (plate_as_cut(a, insets[0]), plate_as_cut(b, insets[1]));
+    let collision = reach_into(&ac, &bc[m], &bc[m1], thickness)
+        .max(reach_into(&bc, &ac[k], &ac[k1], thickness));
+    let gap = match kind {
+        JointKind::Bridge => on_b.distance,
+        JointKind::Weld => edge_to_plate(&ac, &w, &bc, thickness).norm(),
     };
     JointRecord {
         kind,
