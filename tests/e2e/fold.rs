@@ -119,7 +119,7 @@ fn worst(out: &crate::util::Output, name: &str) -> f64 {
 }
 
 /// `spinvalence check`'s worst hub lap, weld gap, reach (between strips and across a
-/// bridge's slot), hub plates into each other and
+/// bridge's slot), hub plates into each other, a leg into the neighbour's hub plate and
 /// widest gap between lapping hub plates are the fold check's, 0.1 mm.
 fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
     for (name, ours) in [
@@ -137,6 +137,10 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
         (
             "hub plates at a lap, widest gap between them",
             "hub_stack_gap_max",
+        ),
+        (
+            "leg through the neighbour's hub plate at a lap",
+            "leg_through_hub_plate_max",
         ),
     ] {
         let theirs = worst(checked, name);

@@ -36,7 +36,8 @@ Checks
   7. hub plates at their laps lie one on the other: over the overlap of the two
      hub plates (seen along one's normal) the height of one mid-plane over the
      other stays >= t (or <= -t); how far from it, <= 0.1 mm.  Informational:
-     the widest gap between the two over a lap.
+     the widest gap between the two over a lap, and how deep each leg's centre
+     line (hub neck to rim neck) runs into the neighbour's hub plate there.
 
 Exit status: 0 all pass, 1 some check failed, 2 input files unreadable.
 """
@@ -819,6 +820,8 @@ def main(argv=None):
     stack_lift = (0.0, None)  # hub plates at a lap: how far from one lying on the other
     stack_gap = (0.0, None)   # ... and the widest gap between them over the lap
     stack_fail = []
+    leg_through = (0.0, None)  # a leg's centre line into the neighbour's hub plate at a lap
+    legs_through = 0
     slot_mismatch = 0
     gap_max = (-float("inf"), None)
     through_links = []
@@ -855,6 +858,20 @@ def main(argv=None):
             widest = hi - thickness if lo >= thickness else (-lo - thickness if hi <= -thickness else hi - lo)
             if stack_gap[1] is None or widest > stack_gap[0]:
                 stack_gap = (widest, where)
+        # informational: each leg leaves its hub at a corner, where the neighbour's hub
+        # plate laps; how deep its centre line runs into that plate
+        for u1, u2 in ((f, g), (g, f)):
+            if hub_pins[u1] is None:
+                continue
+            pf2 = plate_frame(plate3[u2])
+            for j in range(4):
+                H = apply(hub_mot[u1], hub_pins[u1][j])
+                R = apply(pri_mot[u1], rim_pins[u1][j])
+                d_ = segment_reach(H, R, pf2, thickness)
+                if d_ > leg_through[0] or leg_through[1] is None:
+                    leg_through = (d_, "%s leg %d into %s" % (uid[u1], j, uid[u2]))
+                if d_ > REACH_TOL:
+                    legs_through += 1
         if lap < lap_min[0]:
             lap_min = (lap, where)
         lap_max = max(lap_max, lap)
@@ -992,6 +1009,8 @@ def main(argv=None):
              (" (" + ", ".join(through_links[:5]) + ")") if through_links else ""))
     print("info: hub plates at their laps: widest gap between the two over a lap %.3f mm (%s)"
           % (stack_gap[0], stack_gap[1]))
+    print("info: legs whose centre line runs into a neighbour's hub plate at a lap: %d, "
+          "deepest %.3g mm (%s) (not held yet)" % (legs_through, leg_through[0], leg_through[1]))
     for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
                       ("hub lap", lap_fail), ("lap claim", claim_fail), ("bridge", bridge_fail),
                       ("weld", weld_fail), ("plates into each other", reach_fail),
@@ -1032,6 +1051,8 @@ def main(argv=None):
             "bridge_reach_max": rim_reach[0],
             "hub_stack_lift_max": stack_lift[0],
             "hub_stack_gap_max": stack_gap[0],
+            "legs_through_hub_plates": legs_through,
+            "leg_through_hub_plate_max": leg_through[0],
             "problems": ["%s: %s: %s" % p for p in struct],
             "failing": {"leg": leg_fail, "pin": pin_fail, "lap": lap_fail, "lap_claim": claim_fail,
                         "bridge": bridge_fail, "weld": weld_fail, "reach": reach_fail,

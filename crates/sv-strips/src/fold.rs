@@ -201,6 +201,8 @@ struct Folded {
     /// The primary plate as cut: the tile less half the joint slot where a bridge joins
     /// (the plate reaches the tile's other sides), in the world.
     plate: [Point3; 4],
+    /// Each leg's centre line, from its hub neck to its rim neck, in the world.
+    legs: [[Point3; 2]; 4],
 }
 
 /// Fold-check a build: `strips` cut from `frame`. Rows: necks where frame.json pins them,
@@ -283,6 +285,14 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         "hub plates at a lap, widest gap between them (mm; not held)",
         Real::INFINITY,
     );
+    // each leg leaves its hub at a corner, and a corner is where the neighbour's hub plate
+    // laps: at every lap the leg of the upper plate (primaries below) or of the lower one
+    // (primaries above) runs through the other plate (its centre line; not held yet,
+    // docs/geometry.md 5.5)
+    let mut legs_through = Row::max(
+        "leg through the neighbour's hub plate at a lap (mm; not held)",
+        Real::INFINITY,
+    );
     let thickness = params.thickness;
     for (li, link) in frame.links.iter().enumerate() {
         let [a, b] = link.units;
@@ -297,6 +307,11 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         let lap = (fa.hub_plate[k] - fb.hub_plate[m]).dot(&dir);
         laps.see(lap, at);
         claims.see((lap - link.hub_overlap).abs(), at);
+        for (f, g) in [(fa, fb), (fb, fa)] {
+            for [hub, rim] in &f.legs {
+                legs_through.see(reach_into(&g.hub_plate, hub, rim, thickness), at);
+            }
+        }
         if let Some((low, high)) = lap_heights(&fa.hub_plate, &fb.hub_plate) {
             // how far the two slabs are from lying one on the other (0 when one does), and
             // the widest gap between them over the lap
@@ -369,8 +384,21 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         }
     }
     let rows = [
-        pins, legs, plates, laps, claims, welds, collisions, span, bend, twist, rims, rebuilt,
-        through, stacked,
+        pins,
+        legs,
+        plates,
+        laps,
+        claims,
+        welds,
+        collisions,
+        span,
+        bend,
+        twist,
+        rims,
+        rebuilt,
+        through,
+        stacked,
+        legs_through,
     ]
     .into_iter()
     .map(Row::row)
@@ -468,6 +496,7 @@ fn fold_unit(
             hub_plate: layout.hub.map(|p| hub * lift(&p)),
             tile,
             plate: plate_as_cut(&tile, bridged_insets(strip, u, widths.joint)),
+            legs: std::array::from_fn(|k| [hub_world[k], rim_world[k]]),
         },
         Necks {
             pin_offsets,
