@@ -396,6 +396,10 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
                 &plan.bridges,
                 &joint_options,
                 &mut |it, energy| {
+                    // rounds after bridges are split run past the planned iterations
+                    if it as u64 > bar.length().unwrap_or(0) {
+                        bar.set_length((it + joint_options.split_iterations) as u64);
+                    }
                     bar.set_position(it as u64);
                     bar.set_message(format!("residual {energy:.3e}"));
                 },
@@ -528,7 +532,8 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         if let Some(j) = &joints {
             let at = rows.len() - 2;
             let mut joint = joint_rows(j, cfg.strips.direction, &frame);
-            joint.push(open_joints_row(&frame));
+            let tried_both = cfg.joints.both_directions && args.strip_direction.is_none();
+            joint.push(open_joints_row(&frame, tried_both));
             rows.splice(at..at, joint);
         }
         // the stage rows go before the last two (timings and total)
@@ -708,7 +713,7 @@ fn link_name(frame: &sv_frame::FrameFile, units: [usize; 2]) -> String {
 
 /// The summary's row of the joints outside their limits: how many of each kind, the worst
 /// three by their excess over the limit (naming the units), and what would help.
-fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
+fn open_joints_row(frame: &sv_frame::FrameFile, tried_both: bool) -> Vec<String> {
     let limits = frame.params.joint_limits.unwrap_or_default();
     let mut open: Vec<(f64, String)> = Vec::new();
     let (mut bridges, mut welds) = (0, 0);
@@ -759,9 +764,16 @@ fn open_joints_row(frame: &sv_frame::FrameFile) -> Vec<String> {
         "none: every bridge and weld within its limits".to_string()
     } else {
         let worst: Vec<&str> = open.iter().take(3).map(|(_, s)| s.as_str()).collect();
+        // the other strip direction is a lever only where it was not tried
+        let levers = if tried_both {
+            "more [joints] max_iterations or a larger unit size may close them (both strip \
+             directions were tried, the one that held better is kept)"
+        } else {
+            "more [joints] max_iterations, the other --strip-direction or a larger unit size \
+             may close them"
+        };
         format!(
-            "{bridges} bridges, {welds} welds of {} (worst: {}); more [joints] max_iterations, \
-             the other --strip-direction or a larger unit size may close them",
+            "{bridges} bridges, {welds} welds of {} (worst: {}); {levers}",
             frame.links.len(),
             worst.join("; ")
         )
