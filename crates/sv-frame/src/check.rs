@@ -400,7 +400,7 @@ fn check_joints(
     let mut claims = Worst::new("joint records = the plates in the file (mm, rad)", 1e-6);
     let mut unrecorded = Worst::new("links without a joint record", 0.0);
     // the plates as cut: half the joint slot off every side a bridge joins
-    let half = frame.params.cut.map_or(0.0, |c| c.joint / 2.0);
+    let half = frame.params.cut.map_or(0.0, |c| c.plate_inset());
     let mut insets = vec![[0.0; 4]; frame.units.len()];
     for l in &frame.links {
         if l.joint.is_some_and(|j| j.kind == JointKind::Bridge) {

@@ -176,14 +176,14 @@ fn narrowest_web(slots: &[Vec<[Real; 2]>], near: Point2, radius: Real) -> Option
     best
 }
 
-/// How far unit `u`'s plate is cut back from each side of its tile: half the joint slot
-/// `joint` where one of the strip's bridges joins it.
-fn bridged_insets(strip: &StripRecord, u: usize, joint: Real) -> [Real; 4] {
+/// How far unit `u`'s plate is cut back from each side of its tile: `half` (half the joint
+/// slot) where one of the strip's bridges joins it.
+fn bridged_insets(strip: &StripRecord, u: usize, half: Real) -> [Real; 4] {
     let mut inset = [0.0; 4];
     for pin in &strip.pins {
         for (unit, side) in pin.units.into_iter().zip(pin.sides) {
             if unit == u {
-                inset[side] = joint / 2.0;
+                inset[side] = half;
             }
         }
     }
@@ -495,7 +495,7 @@ fn fold_unit(
             primary,
             hub_plate: layout.hub.map(|p| hub * lift(&p)),
             tile,
-            plate: plate_as_cut(&tile, bridged_insets(strip, u, widths.joint)),
+            plate: plate_as_cut(&tile, bridged_insets(strip, u, widths.plate_inset())),
             legs: std::array::from_fn(|k| [hub_world[k], rim_world[k]]),
         },
         Necks {

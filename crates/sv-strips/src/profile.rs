@@ -308,7 +308,7 @@ pub fn profile_strip(
 ) -> Result<StripProfile, StripsError> {
     params.validate()?;
     let r = params.fillet_radius;
-    let half = params.neck_length / 2.0;
+    let half = params.cut_widths().plate_inset();
     let mut outline: Option<Polyline<f64>> = None;
     let mut cuts = Vec::new();
     let mut cut_units = Vec::new();

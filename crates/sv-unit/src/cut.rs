@@ -51,9 +51,15 @@ impl CutWidths {
         joint: 4.5,
     };
 
+    /// How far a unit's plate lies inside its tile's side where the joint slot runs: half
+    /// the slot (the next unit of the strip has the other half).
+    pub fn plate_inset(&self) -> Real {
+        self.joint / 2.0
+    }
+
     /// How far the hub plate lies inside the tile on every side (mm).
     pub fn hub_inset(&self) -> Real {
-        self.joint / 2.0 + self.rim + 2.0 * self.slot + self.leg
+        self.plate_inset() + self.rim + 2.0 * self.slot + self.leg
     }
 
     /// Every width multiplied by `k` (the zero-width limit is `k -> 0`).
@@ -148,7 +154,7 @@ impl UnitLayout {
     /// The cut of the unit whose tile (counter-clockwise, convex) is `tile`.
     pub fn new(tile: &[Point2; 4], w: &CutWidths) -> Result<Self, CutError> {
         let err = |why: String| Err(CutError(why));
-        let Some(q) = inset(tile, w.joint / 2.0) else {
+        let Some(q) = inset(tile, w.plate_inset()) else {
             return err("tile smaller than the joint slot".into());
         };
         let s = w.slot;

@@ -748,7 +748,7 @@ impl Problem<'_> {
     /// How far face `f`'s primary plate is cut back from its tile's sides: half the joint
     /// slot where a bridge joins the next unit of its strip.
     pub(super) fn cut_inset(&self, f: usize) -> [Real; 4] {
-        let half = self.model.cut.map_or(0.0, |c| c.joint / 2.0);
+        let half = self.model.cut.map_or(0.0, |c| c.plate_inset());
         self.side_links[f].map(|l| match l {
             Some(li) if self.bridges[li] => half,
             _ => 0.0,
