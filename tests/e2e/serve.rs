@@ -12,6 +12,10 @@ use tungstenite::Message;
 use crate::fixtures;
 use crate::util::Dir;
 
+/// The longest a read waits: it ends a test against a hung server, it never decides one (a
+/// busy machine's pause is far shorter).
+const READ_CAP: Duration = Duration::from_secs(60);
+
 /// A directory with `out/frame.json` solved from the small flat grid.
 fn solved() -> Dir {
     let dir = Dir::new();
@@ -94,7 +98,7 @@ fn serve_answers_hello_and_targets_and_serves_the_page() {
     );
 
     let tcp = TcpStream::connect(&server.addr).unwrap();
-    tcp.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    tcp.set_read_timeout(Some(READ_CAP)).unwrap();
     let mut req = format!("ws://{}/ws", server.addr)
         .into_client_request()
         .unwrap();
@@ -122,8 +126,7 @@ fn serve_answers_hello_and_targets_and_serves_the_page() {
 
     // the page on the same port
     let mut http = TcpStream::connect(&server.addr).unwrap();
-    http.set_read_timeout(Some(Duration::from_secs(10)))
-        .unwrap();
+    http.set_read_timeout(Some(READ_CAP)).unwrap();
     http.write_all(b"GET / HTTP/1.1\r\nHost: x\r\n\r\n")
         .unwrap();
     let mut page = String::new();
@@ -137,7 +140,7 @@ fn serve_answers_hello_and_targets_and_serves_the_page() {
 
     // a wrong token is refused
     let tcp = TcpStream::connect(&server.addr).unwrap();
-    tcp.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    tcp.set_read_timeout(Some(READ_CAP)).unwrap();
     let mut req = format!("ws://{}/ws", server.addr)
         .into_client_request()
         .unwrap();
@@ -212,7 +215,7 @@ fn serve_bad_input_is_a_one_line_error() {
 /// A websocket to a running server, past `hello`.
 fn join(addr: &str, token: &str, client_id: &str) -> tungstenite::WebSocket<TcpStream> {
     let tcp = TcpStream::connect(addr).unwrap();
-    tcp.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    tcp.set_read_timeout(Some(READ_CAP)).unwrap();
     let mut req = format!("ws://{addr}/ws").into_client_request().unwrap();
     req.headers_mut()
         .insert("sec-websocket-protocol", "spinvalence.v1".parse().unwrap());

@@ -43,12 +43,18 @@ pub fn frame() -> FrameFile {
         .clone()
 }
 
-/// A config with both tokens on an ephemeral port.
+/// A config with both tokens on an ephemeral port. Its timers (the wait for `hello`, the
+/// silence before a peer is dropped, the undo window) are set far beyond any pause of a busy
+/// machine, so that none of them decides a test by accident; the tests of a timer set it
+/// short themselves.
 pub fn config() -> ServeConfig {
     let mut c = ServeConfig::new(frame());
     c.bind = "127.0.0.1:0".into();
     c.token = Some(TOKEN.into());
     c.viewer_token = Some(VIEWER.into());
+    c.hello_timeout = 10 * WAIT;
+    c.heartbeat = 10 * WAIT;
+    c.undo_window = 100 * WAIT;
     c
 }
 
