@@ -746,13 +746,6 @@ mod tests {
             );
         }
     }
-}
-
-#[cfg(test)]
-mod bridge_tests {
-    use super::problem::joint_record;
-    use crate::JointKind;
-    use sv_geom::{Point3, Real};
 
     /// Two 300 mm tiles of one strip side by side in one plane, joined by a bridge 15 mm
     /// from the end of their common side; the second turned by `deg` in the plane about
@@ -767,7 +760,7 @@ mod bridge_tests {
             Point3::new(w.x + c * dx - s * dy, w.y + s * dx + c * dy, 0.0)
         });
         let half = 1.875;
-        let r = joint_record(
+        let r = problem::joint_record(
             [&a, &b],
             [[0.0, half, 0.0, 0.0], [0.0, 0.0, 0.0, half]],
             [1, 3],

@@ -628,8 +628,8 @@ impl Problem<'_> {
             // the plates are cut back half the joint slot where bridges join (their sides'
             // ends move in): a weld's joint point stays on both plates as cut, a bridge's
             // on its tiles' sides (the fold line)
-            let (pa, pb) = (plate_as_cut(&a, insets[0]), plate_as_cut(&b, insets[1]));
-            let (ac, bc) = if bridge { (a, b) } else { (pa, pb) };
+            let as_cut = || (plate_as_cut(&a, insets[0]), plate_as_cut(&b, insets[1]));
+            let (ac, bc) = if bridge { (a, b) } else { as_cut() };
             let (f_lo, f_hi) = ((ac[k] - a[k]).dot(&fh), (a[k1] - ac[k1]).dot(&fh));
             let (g_lo, g_hi) = ((bc[m] - b[m]).dot(&gh), (b[m1] - bc[m1]).dot(&gh));
             let out_f = (room + f_lo - s * flen)
@@ -657,6 +657,7 @@ impl Problem<'_> {
             // no plate reaches into the other: at a weld anywhere, at a bridge across the
             // joint slot (turned in their plane, the rims meet at the end away from it)
             if stiff {
+                let (pa, pb) = if bridge { as_cut() } else { (ac, bc) };
                 r[8..8 + REACH_ROWS].copy_from_slice(&reach_profile(&pa, &pb[m], &pb[m1], th));
                 r[8 + REACH_ROWS..].copy_from_slice(&reach_profile(&pb, &pa[k], &pa[k1], th));
             }
@@ -780,10 +781,7 @@ impl Problem<'_> {
     }
 
     pub(super) fn figures(&self, x: &[Real], units: &[UnitPoints]) -> JointFigures {
-        let mut fig = JointFigures {
-            lap_min: Real::INFINITY,
-            ..Default::default()
-        };
+        let mut fig = JointFigures::default();
         let sides = |f: usize| {
             let q = self.quad(x, f);
             (0..4).map(|k| (q[(k + 1) % 4] - q[k]).norm()).sum::<Real>() / 4.0
@@ -798,28 +796,16 @@ impl Problem<'_> {
             let p = Point3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2]);
             fig.closeness = fig.closeness.max((p - a.point).dot(&a.normal).abs());
         }
-        for (li, l) in self.links.iter().enumerate() {
-            let [f, g] = l.faces;
-            let [k, m] = l.slots;
-            let (hf, hg) = (units[f].hub_plate(), units[g].hub_plate());
-            fig.lap_min = fig.lap_min.min(hub_overlap(
-                &centroid4(&hf),
-                &hf[k],
-                &centroid4(&hg),
-                &hg[m],
-            ));
-            let j = self.record(li, &units[f].primary(), &units[g].primary(), x);
-            match j.kind {
-                JointKind::Bridge => {
-                    fig.bridge_gap = fig.bridge_gap.max(j.gap);
-                    fig.bridge_bend = fig.bridge_bend.max(j.bend.abs());
-                    fig.bridge_twist = fig.bridge_twist.max(j.twist.abs());
-                }
-                JointKind::Weld => fig.weld_gap = fig.weld_gap.max(j.gap),
-            }
-            fig.collision = fig.collision.max(j.collision);
-        }
-        fig
+        let laps: Vec<Real> = self
+            .links
+            .iter()
+            .map(|l| {
+                let ([f, g], [k, m]) = (l.faces, l.slots);
+                let (hf, hg) = (units[f].hub_plate(), units[g].hub_plate());
+                hub_overlap(&centroid4(&hf), &hf[k], &centroid4(&hg), &hg[m])
+            })
+            .collect();
+        fig.measured(&self.records(x, units), &laps)
     }
 }
 
