@@ -161,6 +161,17 @@ pub fn reach_into(a: &[Point3; 4], p: &Point3, q: &Point3, thickness: Real) -> R
     reach_lines(a, p, q, thickness).map_or(0.0, |l| reach_peak(&l).1)
 }
 
+/// How far two facing plates reach into each other: the deeper of `b`'s side `m` into `a`
+/// and `a`'s side `k` into `b` ([`reach_into`]).
+pub fn facing_reach(a: &[Point3; 4], k: usize, b: &[Point3; 4], m: usize, thickness: Real) -> Real {
+    reach_into(a, &b[m], &b[(m + 1) % 4], thickness).max(reach_into(
+        b,
+        &a[k],
+        &a[(k + 1) % 4],
+        thickness,
+    ))
+}
+
 /// A primary plate as cut from its (expanded) tile: side `k` moved into the tile's plane by
 /// `inset[k]` (half the joint slot where a bridge joins the strip's next unit there, 0 where
 /// the plate reaches the tile's side; `docs/fabrication.md` 3). The corner fillets are left

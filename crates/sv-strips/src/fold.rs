@@ -5,7 +5,9 @@
 
 use std::collections::HashMap;
 
-use sv_frame::plates::{edge_to_plate, hinge_turn, lap_heights, plate_as_cut, reach_into};
+use sv_frame::plates::{
+    edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut, reach_into,
+};
 use sv_frame::{CheckReport, CheckRow, FrameFile};
 use sv_geom::{planar, rigid_fit, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
 use sv_unit::UnitLayout;
@@ -330,12 +332,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         // the plates as cut (shortened at their ends where a bridge joins): no facing side
         // reaches into the other plate, between strips nor across a bridge's joint slot
         let (pa, pb) = (&fa.plate, &fb.plate);
-        let depth = reach_into(pa, &pb[m], &pb[(m + 1) % 4], thickness).max(reach_into(
-            pb,
-            &pa[k],
-            &pa[(k + 1) % 4],
-            thickness,
-        ));
+        let depth = facing_reach(pa, k, pb, m, thickness);
         if strip_of.get(&a) == strip_of.get(&b) {
             rims.see(depth, at);
         } else {

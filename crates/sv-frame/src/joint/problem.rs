@@ -10,7 +10,7 @@ use super::piece::Piece;
 use super::unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints, INPUTS};
 use super::{Anchor, JointFigures, JointOptions};
 use crate::plates::{
-    edge_to_plate, hinge_turn, lap_heights, plate_as_cut, reach_into, reach_profile, REACH_ROWS,
+    edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut, reach_profile, REACH_ROWS,
 };
 use crate::solve::hub_overlap;
 use crate::GOAL_PLANARITY;
@@ -826,8 +826,7 @@ pub(crate) fn joint_record(
     let on_b = segment_closest(&w, &w, &b[m], &b[m1]);
     let (bend, twist) = hinge_turn(a, k, b, m);
     let (ac, bc) = (plate_as_cut(a, insets[0]), plate_as_cut(b, insets[1]));
-    let collision = reach_into(&ac, &bc[m], &bc[m1], thickness)
-        .max(reach_into(&bc, &ac[k], &ac[k1], thickness));
+    let collision = facing_reach(&ac, k, &bc, m, thickness);
     let gap = match kind {
         JointKind::Bridge => on_b.distance,
         JointKind::Weld => edge_to_plate(&ac, &w, &bc, thickness).norm(),
