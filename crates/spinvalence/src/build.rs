@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Result};
 use indicatif::ProgressBar;
+use rayon::prelude::*;
 use serde::Serialize;
 use sv_frame::Progress;
 use sv_surface::{SecondaryReport, TargetMesh};
@@ -375,38 +376,50 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         } else {
             vec![first]
         };
+        // the directions are solved side by side (each is deterministic on its own; the
+        // best is chosen in the order above), their bars drawn together
+        let bars = indicatif::MultiProgress::new();
+        let attempts: Vec<Result<(JointScore, sv_strips::StripDirection, Closed)>> = directions
+            .par_iter()
+            .map(|&direction| {
+                let strip_options = sv_strips::StripOptions {
+                    direction,
+                    ..options.strips.clone()
+                };
+                let plan = sv_strips::strip_plan(&frame0, &strip_options)
+                    .map_err(|e| anyhow!("{}: strips: {e}", cfg.target))?;
+                let joint_options = sv_frame::JointOptions {
+                    pieces: plan.pieces,
+                    ..joint_options.clone()
+                };
+                let what = format!("joints, strips along {}", direction_name(direction));
+                let bar = progress_bar(args.quiet, joint_options.max_iterations, &what);
+                let bar = if bar.is_hidden() { bar } else { bars.add(bar) };
+                let closed = sv_frame::close_joints(
+                    &mesh,
+                    &solved,
+                    &surface,
+                    &plan.bridges,
+                    &joint_options,
+                    &mut |it, energy| {
+                        // rounds after bridges are split run past the planned iterations
+                        if it as u64 > bar.length().unwrap_or(0) {
+                            bar.set_length((it + joint_options.split_iterations) as u64);
+                        }
+                        bar.set_position(it as u64);
+                        bar.set_message(format!("residual {energy:.3e}"));
+                    },
+                );
+                finish(&bar);
+                let closed =
+                    closed.map_err(|e| anyhow!("{}: closing the joints: {e}", cfg.target))?;
+                let score = JointScore::of(&closed.1, &joint_options.limits, min_overlap);
+                Ok((score, direction, closed))
+            })
+            .collect();
         let mut best: Option<(JointScore, sv_strips::StripDirection, Closed)> = None;
-        for direction in directions {
-            let strip_options = sv_strips::StripOptions {
-                direction,
-                ..options.strips.clone()
-            };
-            let plan = sv_strips::strip_plan(&frame0, &strip_options)
-                .map_err(|e| anyhow!("{}: strips: {e}", cfg.target))?;
-            let joint_options = sv_frame::JointOptions {
-                pieces: plan.pieces,
-                ..joint_options.clone()
-            };
-            let what = format!("joints, strips along {}", direction_name(direction));
-            let bar = progress_bar(args.quiet, joint_options.max_iterations, &what);
-            let closed = sv_frame::close_joints(
-                &mesh,
-                &solved,
-                &surface,
-                &plan.bridges,
-                &joint_options,
-                &mut |it, energy| {
-                    // rounds after bridges are split run past the planned iterations
-                    if it as u64 > bar.length().unwrap_or(0) {
-                        bar.set_length((it + joint_options.split_iterations) as u64);
-                    }
-                    bar.set_position(it as u64);
-                    bar.set_message(format!("residual {energy:.3e}"));
-                },
-            );
-            finish(&bar);
-            let closed = closed.map_err(|e| anyhow!("{}: closing the joints: {e}", cfg.target))?;
-            let score = JointScore::of(&closed.1, &joint_options.limits, min_overlap);
+        for attempt in attempts {
+            let (score, direction, closed) = attempt?;
             if best.as_ref().is_none_or(|(s, _, _)| score.better_than(s)) {
                 best = Some((score, direction, closed));
             }
