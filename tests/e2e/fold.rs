@@ -98,6 +98,7 @@ fn the_default_build_folds_from_its_dxf_as_our_own_code_measures_it() {
         "bridge: plates into each other across the slot",
         "units that cannot be rebuilt from their cut",
         "hub plates at a lap into each other",
+        "leg through the neighbour's hub plate, outside its relief",
     ] {
         let line = checked
             .stdout
@@ -139,7 +140,7 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
             "hub_stack_gap_max",
         ),
         (
-            "leg through the neighbour's hub plate at a lap",
+            "leg through the neighbour's hub plate, outside its relief",
             "leg_through_hub_plate_max",
         ),
     ] {
@@ -163,6 +164,9 @@ fn joints_hold(what: &str, fig: &Value) {
     assert!(f(fig, "reach_max") <= 0.1, "{what}: {fig}");
     // the hub plates lie one on the other at every lap, never through it
     assert!(f(fig, "hub_stack_lift_max") <= 0.1, "{what}: {fig}");
+    // and the leg that runs down through the lower plate at a lap passes through the relief
+    // cut for it: the leg as a plate, its section through the plate, clear of its steel
+    assert!(f(fig, "leg_through_hub_plate_max") <= 0.1, "{what}: {fig}");
 }
 
 /// Every bridge in the strips, found by our code in the DXF outlines, spans its joint,

@@ -521,6 +521,168 @@ class InputError(Exception):
     pass
 
 
+def inset_quad(Q, delta):
+    """The convex quad Q (flat, either orientation) with every side moved inward by delta."""
+    Q = np.asarray(Q, float)
+    c = Q.mean(0)
+    lines = []
+    for i in range(4):
+        a, b = Q[i], Q[(i + 1) % 4]
+        d = (b - a) / np.linalg.norm(b - a)
+        n = np.array([-d[1], d[0]])
+        if np.dot(c - a, n) < 0:
+            n = -n
+        lines.append((a + n * delta, d))
+    out = []
+    for i in range(4):
+        (p, d), (q, e) = lines[(i + 3) % 4], lines[i]
+        den = d[0] * e[1] - d[1] * e[0]
+        s_ = ((q - p)[0] * e[1] - (q - p)[1] * e[0]) / den
+        out.append(p + d * s_)
+    return np.array(out)
+
+
+def leg_plate(T, cut, joint, hub_pin, rim_pin, folds, hub_m, pri_m, k):
+    """Leg k of the unit of flat tile T as a plate (world quad): its body, the band between
+    its two slots along side k from its hub neck to where the slot crosses its end, put on
+    its two pins and turned about the line between them so that its necks' fold lines, as
+    the leg carries them, lie as near as they can to the same lines as the hub and the rim
+    carry them."""
+    rim, slot, legw = float(cut["rim"]), float(cut["slot"]), float(cut["leg"])
+    q = inset_quad(T, joint / 2.0)
+    outer, inner = inset_quad(q, rim + slot), inset_quad(q, rim + slot + legw)
+    iq, oq = inset_quad(q, rim + 1.5 * slot + legw), inset_quad(q, rim + 0.5 * slot)
+    k1, k2 = (k + 1) % 4, (k + 2) % 4
+    d = (q[k1] - q[k]) / np.linalg.norm(q[k1] - q[k])
+    # where slot k crosses the end of leg k: its inner run's line meets the outer track of
+    # the next side
+    d1 = (q[k2] - q[k1]) / np.linalg.norm(q[k2] - q[k1])
+    den = d[0] * d1[1] - d[1] * d1[0]
+    w = oq[k1] - iq[k]
+    x = iq[k] + d * ((w[0] * d1[1] - w[1] * d1[0]) / den)
+    start = np.dot(hub_pin - outer[k], d)
+    end = np.dot(x - outer[k], d) - slot / 2.0
+    if end <= start:
+        return None
+
+    def on(line, t):
+        e = (line[k1] - line[k]) / np.linalg.norm(line[k1] - line[k])
+        return line[k] + e * ((t - np.dot(line[k] - outer[k], d)) / np.dot(e, d))
+    body = [on(outer, start), on(outer, end), on(inner, end), on(inner, start)]
+    H, R = apply(hub_m, hub_pin), apply(pri_m, rim_pin)
+    e1 = np.append((rim_pin - hub_pin) / np.linalg.norm(rim_pin - hub_pin), 0.0)
+    e2 = np.cross([0.0, 0.0, 1.0], e1)
+    a_ = (R - H) / np.linalg.norm(R - H)
+    b0 = np.cross(a_, [0.0, 0.0, 1.0])
+    if np.linalg.norm(b0) < 1e-6:
+        b0 = np.cross(a_, [1.0, 0.0, 0.0])
+    b0 /= np.linalg.norm(b0)
+    c0 = np.cross(a_, b0)
+    sc = ss = 0.0
+    for fl, M in ((folds[0], hub_m[0]), (folds[1], pri_m[0])):
+        f3 = np.append(fl / np.linalg.norm(fl), 0.0)
+        F = M @ f3
+        f2 = np.dot(f3, e2)
+        sc += f2 * np.dot(b0, F)
+        ss += f2 * np.dot(c0, F)
+    psi = math.atan2(ss, sc)
+    b = b0 * math.cos(psi) + c0 * math.sin(psi)
+    Rl = np.column_stack([a_, b, np.cross(a_, b)]) @ np.column_stack([e1, e2, [0.0, 0.0, 1.0]]).T
+    return np.array([H + Rl @ np.append(p - hub_pin, 0.0) for p in body])
+
+
+def hull2(P):
+    """Convex hull of 2D points, counter-clockwise."""
+    P = sorted(set((round(float(p[0]), 9), round(float(p[1]), 9)) for p in P))
+    if len(P) < 3:
+        return [np.array(p) for p in P]
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    lower, upper = [], []
+    for p in P:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(P):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return [np.array(p) for p in lower[:-1] + upper[:-1]]
+
+
+def leg_section(leg, plate, hub_m, t):
+    """The part of the leg slab (quad `leg`, t through) inside the slab of the hub plate
+    `plate` (world quad, t through) and inside its outline, in the plate's flat frame
+    (through its motion `hub_m`); [] when none."""
+    c, n, u, v, q2 = plate_frame(plate)
+    nl = np.cross(leg[2] - leg[0], leg[3] - leg[1])
+    nl /= np.linalg.norm(nl)
+    corners = [p + nl * o for o in (-t / 2, t / 2) for p in leg]
+    edges = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
+             (0, 4), (1, 5), (2, 6), (3, 7)]
+    h = [float(np.dot(p - c, n)) for p in corners]
+    pts = [corners[i] for i in range(8) if abs(h[i]) <= t / 2]
+    for i, j in edges:
+        for level in (-t / 2, t / 2):
+            if (h[i] - level) * (h[j] - level) < 0:
+                pts.append(corners[i] + (corners[j] - corners[i]) * ((level - h[i]) / (h[j] - h[i])))
+    sec = hull2([np.array([np.dot(p - c, u), np.dot(p - c, v)]) for p in pts])
+    if len(sec) < 3:
+        return []
+    outline = [np.asarray(p, float) for p in q2]
+    if sum(outline[i][0] * outline[(i + 1) % 4][1] - outline[(i + 1) % 4][0] * outline[i][1]
+           for i in range(4)) < 0:
+        outline = outline[::-1]
+    inside = clip_convex(sec, outline)
+    if len(inside) < 3:
+        return []
+    R, tt = hub_m[0], hub_m[1]
+    return [(R.T @ (c + u * p[0] + v * p[1] - tt))[:2] for p in inside]
+
+
+def into_steel(sec, outline, cuts, step=0.5):
+    """How deep the flat convex polygon sec lies in a plate's steel: inside the quad
+    outline and outside every cut (dense closed contours, taken every ~0.25 mm). Sampled
+    every half millimetre."""
+    if len(sec) < 3 or outline is None:
+        return 0.0
+    S = np.array(sec)
+    lo, hi = S.min(0), S.max(0)
+    xs, ys = np.meshgrid(np.arange(lo[0], hi[0] + step, step), np.arange(lo[1], hi[1] + step, step))
+    G = np.column_stack([xs.ravel(), ys.ravel()])
+
+    def edges(poly):
+        poly = np.asarray(poly, float)[:, :2]
+        return poly, np.roll(poly, -1, axis=0)
+
+    def inside(poly, P):
+        a, b = edges(poly)
+        y = P[:, 1][:, None]
+        x = P[:, 0][:, None]
+        cond = (a[None, :, 1] > y) != (b[None, :, 1] > y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = a[None, :, 0] + (y - a[None, :, 1]) / (b[None, :, 1] - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0])
+        return (np.count_nonzero(cond & (x < xc), axis=1) % 2) == 1
+    P = np.vstack([G[inside(S, G)], S])
+    cuts = [np.asarray(cu, float)[::5, :2] for cu in cuts]
+    free = np.zeros(len(P), bool)
+    for cu in cuts:
+        free |= inside(cu, P)
+    P = P[~free]
+    if len(P) == 0:
+        return 0.0
+    d = np.full(len(P), np.inf)
+    for poly in [np.asarray(outline, float)] + cuts:
+        a, b = edges(poly)
+        e = b - a
+        ee = np.maximum((e * e).sum(1), 1e-300)
+        tt = np.clip((((P[:, None, :] - a[None]) * e[None]).sum(2)) / ee[None], 0.0, 1.0)
+        foot = a[None] + tt[:, :, None] * e[None]
+        d = np.minimum(d, np.linalg.norm(P[:, None, :] - foot, axis=2).min(1))
+    return float(d.max())
+
+
 def load_inputs(d):
     try:
         with open(os.path.join(d, "frame.json")) as f:
@@ -600,6 +762,8 @@ def main(argv=None):
     pri_mot = [None] * nu
     hub_pins = [None] * nu   # flat, 4x2
     rim_pins = [None] * nu
+    neck_folds = [None] * nu  # per leg: the hub neck's and the rim neck's fold line, flat
+    slot_dense = [None] * nu  # the unit's cuts, flattened
     plate_flat = [None] * nu  # hub plate corners, flat
     cut_plate = [None] * nu   # primary plate as the outline cuts it: flat quad, side lines
     strip_of = [None] * nu
@@ -659,6 +823,8 @@ def main(argv=None):
                         problems.append(("legs", uid[ui], "slots %d/%d: %d necks" % (i, k, len(nk))))
             hp = [None] * 4
             rp = [None] * 4
+            folds = [None] * 4
+            slot_dense[ui] = dense
             for nk in cand:
                 best = None
                 for j in range(4):
@@ -670,6 +836,7 @@ def main(argv=None):
                 if hp[j] is not None:
                     problems.append(("legs", uid[ui], "two slot pairs claim leg %d" % j))
                 hp[j], rp[j] = h[1], r[1]
+                folds[j] = (h[3] - h[2], r[3] - r[2])
                 # the leg joins the hub on the inner slot track and the rim on the
                 # outer one: the hub neck lies deeper inside the tile (a leg width
                 # and a slot), on any tile however skewed
@@ -681,11 +848,14 @@ def main(argv=None):
             else:
                 hub_pins[ui] = np.array(hp)
                 rim_pins[ui] = np.array(rp)
+                neck_folds[ui] = folds
             # ---- hub plate: quad of the four inner slot edges.
             # The hub plate's corners are not cut as corners (the legs' hub
             # necks join there), so each corner is derived as the intersection
             # of the lines of the two adjacent inner slot edges: per slot the
-            # long straight edge nearest the tile centre.
+            # long straight edge nearest the tile centre (longer than half a side:
+            # the sides of a relief cut into the hub for a neighbour's leg are
+            # shorter).
             side_len = np.linalg.norm(T[1] - T[0])
             side_n = []
             for j in range(4):
@@ -695,20 +865,31 @@ def main(argv=None):
                     nn = -nn
                 side_n.append(nn)
             edge_of_side = [None] * 4
-            for ln in lines:
-                best = None
-                for p, q in ln:
-                    if np.linalg.norm(q - p) < 0.25 * side_len:
+            straight = [(p, q) for ln in lines for p, q in ln if np.linalg.norm(q - p) > 1.0]
+            for j in range(4):
+                dj = (T[(j + 1) % 4] - T[j]) / np.linalg.norm(T[(j + 1) % 4] - T[j])
+                groups = []   # [offset, total length, longest edge]
+                for p, q in straight:
+                    e = (q - p) / np.linalg.norm(q - p)
+                    if abs(e[0] * dj[1] - e[1] * dj[0]) > math.sin(math.radians(2.0)):
                         continue
-                    dv = (q - p) / np.linalg.norm(q - p)
-                    dist = abs((ctr - p)[0] * dv[1] - (ctr - p)[1] * dv[0])
-                    if best is None or dist < best[0]:
-                        best = (dist, p, q)
-                if best is None:
-                    continue
-                _, p, q = best
-                j = int(np.argmax([np.dot(0.5 * (p + q) - ctr, nn) for nn in side_n]))
-                edge_of_side[j] = (p, q)
+                    off = float(np.dot(0.5 * (p + q) - ctr, side_n[j]))
+                    if off <= 0:
+                        continue
+                    ln_ = float(np.linalg.norm(q - p))
+                    for g in groups:
+                        if abs(g[0] - off) < 0.2:
+                            g[1] += ln_
+                            if ln_ > np.linalg.norm(g[2][1] - g[2][0]):
+                                g[2] = (p, q)
+                            break
+                    else:
+                        groups.append([off, ln_, (p, q)])
+                # the line nearest the centre that runs along most of the side (a relief
+                # cut into the hub breaks it, and its own sides are short)
+                long_ = [g for g in groups if g[1] >= 0.4 * side_len]
+                if long_:
+                    edge_of_side[j] = min(long_, key=lambda g: g[0])[2]
             if any(e is None for e in edge_of_side):
                 problems.append(("laps", uid[ui], "hub plate edges not found"))
             else:
@@ -858,16 +1039,20 @@ def main(argv=None):
             widest = hi - thickness if lo >= thickness else (-lo - thickness if hi <= -thickness else hi - lo)
             if stack_gap[1] is None or widest > stack_gap[0]:
                 stack_gap = (widest, where)
-        # informational: each leg leaves its hub at a corner, where the neighbour's hub
-        # plate laps; how deep its centre line runs into that plate
+        # each leg leaves its hub at a corner, where the neighbour's hub plate laps: the
+        # leg as a plate, its section through that plate, against the plate's steel (the
+        # relief cut for it excepted)
         for u1, u2 in ((f, g), (g, f)):
-            if hub_pins[u1] is None:
+            if hub_pins[u1] is None or plate3[u2] is None or slot_dense[u2] is None:
                 continue
-            pf2 = plate_frame(plate3[u2])
             for j in range(4):
-                H = apply(hub_mot[u1], hub_pins[u1][j])
-                R = apply(pri_mot[u1], rim_pins[u1][j])
-                d_ = segment_reach(H, R, pf2, thickness)
+                leg = leg_plate(flat_tile[u1], cut, float(frame["params"]["cut"]["joint"]),
+                                hub_pins[u1][j], rim_pins[u1][j], neck_folds[u1][j],
+                                hub_mot[u1], pri_mot[u1], j)
+                if leg is None:
+                    continue
+                sec = leg_section(leg, plate3[u2], hub_mot[u2], thickness)
+                d_ = into_steel(sec, plate_flat[u2], slot_dense[u2])
                 if d_ > leg_through[0] or leg_through[1] is None:
                     leg_through = (d_, "%s leg %d into %s" % (uid[u1], j, uid[u2]))
                 if d_ > REACH_TOL:
@@ -1009,8 +1194,8 @@ def main(argv=None):
              (" (" + ", ".join(through_links[:5]) + ")") if through_links else ""))
     print("info: hub plates at their laps: widest gap between the two over a lap %.3f mm (%s)"
           % (stack_gap[0], stack_gap[1]))
-    print("info: legs whose centre line runs into a neighbour's hub plate at a lap: %d, "
-          "deepest %.3g mm (%s) (not held yet)" % (legs_through, leg_through[0], leg_through[1]))
+    print("legs through a neighbour's hub plate outside its relief: %d, deepest %.3g mm (%s)"
+          % (legs_through, leg_through[0], leg_through[1]))
     for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
                       ("hub lap", lap_fail), ("lap claim", claim_fail), ("bridge", bridge_fail),
                       ("weld", weld_fail), ("plates into each other", reach_fail),

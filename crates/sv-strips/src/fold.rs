@@ -5,13 +5,11 @@
 
 use std::collections::HashMap;
 
-use sv_frame::plates::{
-    edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut, reach_into,
-};
+use sv_frame::plates::{edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut};
 use sv_frame::{CheckReport, CheckRow, FrameFile};
-use sv_geom::{planar, rigid_fit, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
-use sv_unit::UnitLayout;
+use sv_geom::{planar, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
 
+use crate::relief::{leg_plate, lift, neck_room, place, section_in_plate, Placed};
 use crate::{ProfileParams, StripRecord, StripsFile};
 
 /// Limits of [`fold_check`] (mm and degrees).
@@ -123,16 +121,6 @@ fn p3(a: &[Real; 3]) -> Point3 {
     Point3::new(a[0], a[1], a[2])
 }
 
-fn lift(p: &Point2) -> Point3 {
-    Point3::new(p.x, p.y, 0.0)
-}
-
-/// `q` scaled by `e` about its centroid.
-fn expanded(q: &[[Real; 3]; 4], e: Real) -> [Point3; 4] {
-    let c = q.iter().fold(Vector3::zeros(), |a, p| a + p3(p).coords) / 4.0;
-    q.map(|p| Point3::from(c + (p3(&p).coords - c) * e))
-}
-
 /// The narrowest web between two different slots of a unit near `near`: its centre and
 /// width. `slots` are the unit's slot contours flattened to closed polylines.
 fn narrowest_web(slots: &[Vec<[Real; 2]>], near: Point2, radius: Real) -> Option<(Point2, Real)> {
@@ -203,8 +191,12 @@ struct Folded {
     /// The primary plate as cut: the tile less half the joint slot where a bridge joins
     /// (the plate reaches the tile's other sides), in the world.
     plate: [Point3; 4],
-    /// Each leg's centre line, from its hub neck to its rim neck, in the world.
-    legs: [[Point3; 2]; 4],
+    /// The unit flat and in the world (for its legs as plates).
+    placed: Placed,
+    /// Its necks as cut (hub, rim), flat.
+    necks: [[Point2; 4]; 2],
+    /// Its cuts as cut (slots, with their reliefs), flat, flattened to closed polylines.
+    slots: Vec<Vec<[Real; 2]>>,
 }
 
 /// Fold-check a build: `strips` cut from `frame`. Rows: necks where frame.json pins them,
@@ -213,7 +205,6 @@ struct Folded {
 pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -> CheckReport {
     let params = &strips.params.profile;
     let widths = params.cut_widths();
-    let e = frame.params.expansion;
     let mut pins = Row::max("neck as cut at its pin in frame.json (mm)", limits.pin);
     let mut legs = Row::max(
         "leg between its necks, folded into the pose (mm)",
@@ -237,7 +228,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
                     .map_or(format!("unit {u}"), |r| format!("unit {}", r.id))
             };
             strip_of.insert(u, si);
-            match fold_unit(frame, strip, j, &widths, e) {
+            match fold_unit(frame, strip, j, &widths) {
                 Ok((f, necks)) => {
                     for (what, err) in necks.pin_offsets {
                         pins.see(err, || format!("{} {what}", name()));
@@ -288,12 +279,12 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         Real::INFINITY,
     );
     // each leg leaves its hub at a corner, and a corner is where the neighbour's hub plate
-    // laps: at every lap the leg of the upper plate (primaries below) or of the lower one
-    // (primaries above) runs through the other plate (its centre line; not held yet,
-    // docs/geometry.md 5.5)
+    // laps: at every lap one leg runs down through the lower plate, through the relief cut
+    // for it (docs/geometry.md 5.5); the leg as a plate, its section through the plate,
+    // against the plate's steel
     let mut legs_through = Row::max(
-        "leg through the neighbour's hub plate at a lap (mm; not held)",
-        Real::INFINITY,
+        "leg through the neighbour's hub plate, outside its relief (mm)",
+        limits.collision,
     );
     let thickness = params.thickness;
     for (li, link) in frame.links.iter().enumerate() {
@@ -310,8 +301,14 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         laps.see(lap, at);
         claims.see((lap - link.hub_overlap).abs(), at);
         for (f, g) in [(fa, fb), (fb, fa)] {
-            for [hub, rim] in &f.legs {
-                legs_through.see(reach_into(&g.hub_plate, hub, rim, thickness), at);
+            for k in 0..4 {
+                let pins = [f.necks[0][k], f.necks[1][k]];
+                let Some(leg) = leg_plate(&f.placed, &widths, k, pins, 0.0) else {
+                    continue;
+                };
+                let section = section_in_plate(&leg, &g.placed, thickness);
+                let d = into_steel(&section, &g.placed.layout.hub, &g.slots);
+                legs_through.see(d, at);
             }
         }
         if let Some((low, high)) = lap_heights(&fa.hub_plate, &fb.hub_plate) {
@@ -422,26 +419,13 @@ fn fold_unit(
     strip: &StripRecord,
     j: usize,
     widths: &sv_unit::CutWidths,
-    e: Real,
 ) -> Result<(Folded, Necks), String> {
     let tile = &strip.flat[j];
     let u = tile.unit;
-    let unit = frame
-        .units
-        .get(u)
-        .ok_or_else(|| format!("frame.json has no unit {u}"))?;
     let flat = tile.primary.map(|p| Point2::new(p[0], p[1]));
-    let layout = UnitLayout::new(&flat, widths).map_err(|e| e.0)?;
-    let flat3 = flat.map(|p| lift(&p));
-    let (primary, res_p) =
-        rigid_fit(&flat3, &expanded(&unit.primary, e)).ok_or("the primary tile is degenerate")?;
-    let (hub, res_h) = rigid_fit(&flat3, &expanded(&unit.hub, e)).ok_or("the hub is degenerate")?;
-    if res_p.max(res_h) > 0.01 {
-        return Err(format!(
-            "its flat tile is not congruent to frame.json's tiles ({:.3} mm off)",
-            res_p.max(res_h)
-        ));
-    }
+    let placed = place(frame, u, &flat, widths)?;
+    let (hub, primary) = (placed.hub, placed.primary);
+    let unit = &frame.units[u];
     let slots: Vec<Vec<[Real; 2]>> = strip
         .cuts
         .iter()
@@ -455,8 +439,8 @@ fn fold_unit(
             slots.len()
         ));
     }
-    let nominal = layout.pins();
-    let radius = widths.neck + 2.0 * widths.slot + 2.0;
+    let nominal = placed.layout.pins();
+    let radius = neck_room(widths);
     let find = |p: Point2, what: &str| {
         narrowest_web(&slots, p, radius)
             .map(|(c, _)| c)
@@ -487,13 +471,16 @@ fn fold_unit(
         ((hub_world[k] - rim_world[k]).norm() - (hub_pins[k] - rim_pins[k]).norm()).abs()
     });
     let tile = flat.map(|p| primary * lift(&p));
+    let hub_plate = placed.hub_plate;
     Ok((
         Folded {
             primary,
-            hub_plate: layout.hub.map(|p| hub * lift(&p)),
+            hub_plate,
             tile,
             plate: plate_as_cut(&tile, bridged_insets(strip, u, widths.plate_inset())),
-            legs: std::array::from_fn(|k| [hub_world[k], rim_world[k]]),
+            placed,
+            necks: [hub_pins, rim_pins],
+            slots,
         },
         Necks {
             pin_offsets,
@@ -540,4 +527,77 @@ fn bridge(
         da.angle(&db_in).to_degrees()
     };
     (worst, bend)
+}
+
+/// How deep the flat convex polygon `section` lies in a plate's steel: inside `outline`
+/// and outside every cut of `cuts` (closed polylines). Sampled every half millimetre.
+fn into_steel(section: &[Point2], outline: &[Point2; 4], cuts: &[Vec<[Real; 2]>]) -> Real {
+    if section.len() < 3 {
+        return 0.0;
+    }
+    let inside = |poly: &[[Real; 2]], p: &Point2| {
+        let mut c = false;
+        for i in 0..poly.len() {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            if (a[1] > p.y) != (b[1] > p.y)
+                && p.x < a[0] + (p.y - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
+            {
+                c = !c;
+            }
+        }
+        c
+    };
+    let to_segment = |a: Point2, b: Point2, p: &Point2| {
+        let e = b - a;
+        let t = ((p - a).dot(&e) / e.norm_squared()).clamp(0.0, 1.0);
+        (a + e * t - p).norm()
+    };
+    let depth = |p: &Point2| {
+        if cuts.iter().any(|c| inside(c, p)) {
+            return 0.0;
+        }
+        let mut d = (0..4)
+            .map(|i| to_segment(outline[i], outline[(i + 1) % 4], p))
+            .fold(Real::INFINITY, Real::min);
+        for c in cuts {
+            for i in 0..c.len() {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                d = d.min(to_segment(
+                    Point2::new(a[0], a[1]),
+                    Point2::new(b[0], b[1]),
+                    p,
+                ));
+            }
+        }
+        d
+    };
+    // the section's bounding box on a half-millimetre grid, points inside it
+    let (lo, hi) = section.iter().fold(
+        (
+            Point2::new(Real::INFINITY, Real::INFINITY),
+            Point2::new(Real::NEG_INFINITY, Real::NEG_INFINITY),
+        ),
+        |(lo, hi), p| {
+            (
+                Point2::new(lo.x.min(p.x), lo.y.min(p.y)),
+                Point2::new(hi.x.max(p.x), hi.y.max(p.y)),
+            )
+        },
+    );
+    let ring: Vec<[Real; 2]> = section.iter().map(|p| [p.x, p.y]).collect();
+    let step = 0.5;
+    let mut worst = section.iter().map(depth).fold(0.0, Real::max);
+    let (nx, ny) = (
+        ((hi.x - lo.x) / step).ceil() as usize,
+        ((hi.y - lo.y) / step).ceil() as usize,
+    );
+    for i in 0..=nx {
+        for j in 0..=ny {
+            let p = Point2::new(lo.x + i as Real * step, lo.y + j as Real * step);
+            if inside(&ring, &p) {
+                worst = worst.max(depth(&p));
+            }
+        }
+    }
+    worst
 }

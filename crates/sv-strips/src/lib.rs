@@ -38,9 +38,11 @@ mod error;
 mod face;
 mod file;
 mod fold;
+mod leg_plate;
 mod params;
 mod plane;
 mod profile;
+mod relief;
 mod strip;
 mod tiles;
 
@@ -55,6 +57,7 @@ pub use params::{
 };
 pub use plane::convex_intersection_area;
 pub use profile::{profile_strip, Label, StripProfile};
+pub use relief::{add_reliefs, Relief};
 pub use strip::{
     apply_labels, chains, strip_id, strip_plan, unit_labels, unroll, unroll_tiles, FlatStrip, Pin,
     StripPlan, UnitLabel,

@@ -154,10 +154,15 @@ impl Default for ProfileParams {
 /// Smallest inside radius a plasma-cut part may have (mm).
 pub const MIN_INSIDE_RADIUS: f64 = 1.0;
 
+/// The minimum web between cuts in sheet `thickness` (mm): max(1.5 t, 3 mm).
+pub(crate) fn min_web(thickness: f64) -> f64 {
+    (1.5 * thickness).max(3.0)
+}
+
 impl ProfileParams {
     /// The minimum web between cuts and the minimum slot width: max(1.5 t, 3 mm).
     pub fn min_web(&self) -> f64 {
-        (1.5 * self.thickness).max(3.0)
+        min_web(self.thickness)
     }
 
     /// The profile of sheet `thickness` with every width the least its rules allow

@@ -7,6 +7,8 @@ use serde::{Deserialize, Serialize};
 use sv_geom::{Contour, Point2, Vector2};
 use sv_unit::UnitLayout;
 
+use crate::Relief;
+
 use crate::plane::cross;
 use crate::{FaceMark, FlatStrip, HubFace, ProfileParams, StripsError};
 
@@ -136,6 +138,51 @@ fn slot(center: &[Point2], width: f64) -> Result<Polyline<f64>, StripsError> {
     Ok(out)
 }
 
+/// Cut relief `r` as one with the hook slot it runs into: it must meet exactly one (one that
+/// met two would cut the web between them, a neck).
+fn cut_relief(slots: &mut [Polyline<f64>], r: &Relief) -> Result<(), String> {
+    let [a, b, c, d] = r.outline;
+    let mut notch = Polyline::with_capacity(4, true);
+    notch.add(a.x, a.y, 0.0);
+    notch.add(b.x, b.y, 0.0);
+    notch.add(c.x, c.y, 0.0);
+    // clockwise: round the back of the closed end clockwise
+    notch.add(d.x, d.y, -1.0);
+    if notch.area() < 0.0 {
+        notch.invert_direction_mut();
+    }
+    let mut met = None;
+    for (i, s) in slots.iter().enumerate() {
+        let mut s = s.clone();
+        if s.area() < 0.0 {
+            s.invert_direction_mut();
+        }
+        let mut joined = s.boolean(&notch, BooleanOp::Or);
+        if joined.pos_plines.len() == 1 && joined.neg_plines.is_empty() {
+            if met.is_some() {
+                return Err(format!(
+                    "the relief for leg {} of unit {} would cut through a neck",
+                    r.leg, r.leg_of
+                ));
+            }
+            let mut one = joined.pos_plines.remove(0).pline;
+            // clockwise, as every slot
+            if one.area() > 0.0 {
+                one.invert_direction_mut();
+            }
+            met = Some((i, one));
+        }
+    }
+    let (i, one) = met.ok_or_else(|| {
+        format!(
+            "the relief for leg {} of unit {} reaches no hook slot",
+            r.leg, r.leg_of
+        )
+    })?;
+    slots[i] = one;
+    Ok(())
+}
+
 /// Everything of one unit inside its plate.
 struct UnitCut {
     slots: Vec<Polyline<f64>>,
@@ -159,15 +206,19 @@ fn unit_cuts(
     label: String,
     face: HubFace,
     tile: &[Point2; 4],
+    reliefs: &[Relief],
     p: &ProfileParams,
 ) -> Result<UnitCut, StripsError> {
     let layout =
         UnitLayout::new(tile, &p.cut_widths()).map_err(|e| unit_error(strip, unit, e.0))?;
-    let slots = layout
+    let mut slots = layout
         .slot_paths
         .iter()
         .map(|c| slot(c, p.slot_width))
         .collect::<Result<Vec<_>, _>>()?;
+    for r in reliefs {
+        cut_relief(&mut slots, r).map_err(|why| unit_error(strip, unit, why))?;
+    }
     let folds = (0..4)
         .flat_map(|j| [layout.hub_necks[j], layout.rim_necks[(j + 1) % 4]])
         .map(|[a, b]| shorten(a, b, 0.75))
@@ -336,7 +387,8 @@ pub fn profile_strip(
             .ok_or_else(|| StripsError::Internal {
                 why: format!("strip {}: unit {u} has no hub face", strip.id),
             })?;
-        let cut = unit_cuts(&strip.id, u, label, face, tile, params)?;
+        let reliefs = strip.reliefs.get(j).map_or(&[][..], |r| &r[..]);
+        let cut = unit_cuts(&strip.id, u, label, face, tile, reliefs, params)?;
         for sl in &cut.slots {
             cuts.push(Contour::from_pline(sl));
             cut_units.push(u);
@@ -497,7 +549,8 @@ mod tests {
                 Point2::new(a, a),
                 Point2::new(0.0, a),
             ];
-            let Ok(cut) = unit_cuts("A01", 0, "A01-01".into(), HubFace::Back, &tile, &p) else {
+            let Ok(cut) = unit_cuts("A01", 0, "A01-01".into(), HubFace::Back, &tile, &[], &p)
+            else {
                 continue;
             };
             let hub = UnitLayout::new(&tile, &p.cut_widths()).unwrap().hub;
@@ -585,5 +638,43 @@ mod tests {
         };
         let why = face_mark(&narrow, &label, HubFace::Etched, 3.75).unwrap_err();
         assert!(why.contains("15.0 mm from the label"), "{why}");
+    }
+}
+
+#[cfg(test)]
+mod relief_tests {
+    use super::*;
+
+    /// A relief 10 mm wide from 20 mm inside the hub down into a straight slot along x
+    /// (4 mm wide): one cut of the slot's area plus the relief's band to the slot's centre
+    /// line and the half disc round its closed end.
+    #[test]
+    fn a_relief_is_cut_as_one_with_the_slot_it_runs_into() {
+        let slot_path = [Point2::new(-50.0, 0.0), Point2::new(50.0, 0.0)];
+        let mut slots = vec![slot(&slot_path, 4.0).unwrap()];
+        let before = slots[0].area().abs();
+        let r = Relief {
+            // clockwise, as relief::relief_for builds it: the closed end's corners last and
+            // first
+            outline: [
+                Point2::new(5.0, 20.0),
+                Point2::new(5.0, 0.0),
+                Point2::new(-5.0, 0.0),
+                Point2::new(-5.0, 20.0),
+            ],
+            width: 10.0,
+            leg_of: 1,
+            leg: 2,
+        };
+        cut_relief(&mut slots, &r).unwrap();
+        let band = 10.0 * (20.0 - 2.0);
+        let disc = std::f64::consts::PI * 25.0 / 2.0;
+        let after = slots[0].area().abs();
+        assert!(
+            (after - before - band - disc).abs() < 0.05,
+            "{after} - {before}"
+        );
+        // clockwise, as every slot
+        assert!(slots[0].area() < 0.0);
     }
 }

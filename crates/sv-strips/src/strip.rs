@@ -44,6 +44,9 @@ pub struct FlatStrip {
     pub pins: Vec<Pin>,
     /// Length and width of the bounding rectangle of the tiles (mm).
     pub size: [f64; 2],
+    /// Per unit: the reliefs cut into its hub plate for its neighbours' legs (empty but
+    /// where [`unroll`] finds a frame whose hub plates lap one on the other).
+    pub reliefs: Vec<Vec<crate::Relief>>,
 }
 
 /// Etched label and strip of a unit, for frame.json `id` / `strip`.
@@ -451,7 +454,9 @@ impl Piece {
 pub fn unroll(frame: &FrameFile, options: &StripOptions) -> Result<Vec<FlatStrip>, StripsError> {
     options.validate()?;
     let tiles = TileSet::from_frame(frame)?;
-    unroll_tiles(&tiles, options)
+    let mut strips = unroll_tiles(&tiles, options)?;
+    crate::relief::add_reliefs(frame, &mut strips)?;
+    Ok(strips)
 }
 
 /// What the strips stage plans for a frame before its joints close: which links its strips
@@ -674,5 +679,6 @@ fn normalise(id: String, p: Piece, hub_faces: Vec<HubFace>) -> FlatStrip {
             })
             .collect(),
         size: [long, short],
+        reliefs: Vec::new(),
     }
 }
