@@ -377,6 +377,45 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             twist.see(tw.abs().to_degrees(), at);
         }
     }
+    // a leg ends at its tile's corner, where the neighbouring tiles' corners are: the leg as
+    // a plate against the rims of the units round that corner (inside a rim a primary
+    // plate is open: its slots, and the hub and legs that left it)
+    let mut legs_rims = Row::max(
+        "leg through a neighbour's rim (mm; not held)",
+        Real::INFINITY,
+    );
+    let mut round: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (u, face) in frame.mesh.faces.iter().enumerate() {
+        for &v in face {
+            round.entry(v).or_default().push(u);
+        }
+    }
+    for (&u, f) in &folded {
+        let Some(face) = frame.mesh.faces.get(u) else {
+            continue;
+        };
+        let mut near: Vec<usize> = face.iter().flat_map(|v| round[v].clone()).collect();
+        near.sort_unstable();
+        near.dedup();
+        for k in 0..4 {
+            let pins = [f.necks[0][k], f.necks[1][k]];
+            let Some(leg) = leg_plate(&f.placed, &widths, k, pins, 0.0) else {
+                continue;
+            };
+            for &w in near.iter().filter(|&&w| w != u) {
+                let Some(g) = folded.get(&w) else {
+                    continue;
+                };
+                let depth = rim_reach(&leg, &g.plate, widths.rim, thickness);
+                legs_rims.see(depth, || {
+                    format!(
+                        "unit {} leg {k} into {}",
+                        frame.units[u].id, frame.units[w].id
+                    )
+                });
+            }
+        }
+    }
     let rows = [
         pins,
         legs,
@@ -393,6 +432,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         through,
         stacked,
         legs_through,
+        legs_rims,
     ]
     .into_iter()
     .map(Row::row)
@@ -600,4 +640,30 @@ fn into_steel(section: &[Point2], outline: &[Point2; 4], cuts: &[Vec<[Real; 2]>]
         }
     }
     worst
+}
+
+/// How deep the leg plate `leg` runs into the rim of the primary plate `plate` (as cut,
+/// `thickness` through): its section through the plate's slab, against the band `rim` wide
+/// inside the plate's outline.
+fn rim_reach(leg: &[Point3; 4], plate: &[Point3; 4], rim: Real, thickness: Real) -> Real {
+    let Some((c, _, u, v)) = crate::leg_plate::frame(plate) else {
+        return 0.0;
+    };
+    let section = crate::leg_plate::section_in_slab(leg, plate, thickness);
+    if section.len() < 3 {
+        return 0.0;
+    }
+    let mut outline = plate.map(|p| Point2::new((p - c).dot(&u), (p - c).dot(&v)));
+    if crate::leg_plate::area(&outline) < 0.0 {
+        outline.reverse();
+    }
+    let Some(open) = sv_unit::inset(&outline, rim) else {
+        return 0.0;
+    };
+    let inside = crate::leg_plate::clip_convex(&section, &outline);
+    into_steel(
+        &inside,
+        &outline,
+        &[open.iter().map(|p| [p.x, p.y]).collect()],
+    )
 }
