@@ -120,8 +120,8 @@ fn worst(out: &crate::util::Output, name: &str) -> f64 {
 }
 
 /// `spinvalence check`'s worst hub lap, weld gap, reach (between strips and across a
-/// bridge's slot), hub plates into each other, a leg into the neighbour's hub plate and
-/// widest gap between lapping hub plates are the fold check's, 0.1 mm.
+/// bridge's slot), hub plates into each other, a leg into the neighbour's hub plate or rim
+/// and widest gap between lapping hub plates are the fold check's, 0.1 mm.
 fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
     for (name, ours) in [
         ("hub lap as cut", "lap_min"),
@@ -143,6 +143,7 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
             "leg through the neighbour's hub plate, outside its relief",
             "leg_through_hub_plate_max",
         ),
+        ("leg through a neighbour's rim", "leg_into_rim_max"),
     ] {
         let theirs = worst(checked, name);
         assert!(

@@ -641,6 +641,35 @@ def leg_section(leg, plate, hub_m, t):
     return [(R.T @ (c + u * p[0] + v * p[1] - tt))[:2] for p in inside]
 
 
+def rim_reach_of(leg, plate, rim_w, t):
+    """How deep the leg plate runs into the rim of the primary plate `plate` (world quad as
+    cut, t through): its section through the plate's slab against the band rim_w wide
+    inside the plate's outline."""
+    c, n, u, v, q2 = plate_frame(plate)
+    nl = np.cross(leg[2] - leg[0], leg[3] - leg[1])
+    nl /= np.linalg.norm(nl)
+    corners = [p + nl * o for o in (-t / 2, t / 2) for p in leg]
+    edges = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
+             (0, 4), (1, 5), (2, 6), (3, 7)]
+    h = [float(np.dot(p - c, n)) for p in corners]
+    pts = [corners[i] for i in range(8) if abs(h[i]) <= t / 2]
+    for i, j in edges:
+        for level in (-t / 2, t / 2):
+            if (h[i] - level) * (h[j] - level) < 0:
+                pts.append(corners[i] + (corners[j] - corners[i]) * ((level - h[i]) / (h[j] - h[i])))
+    sec = hull2([np.array([np.dot(p - c, u), np.dot(p - c, v)]) for p in pts])
+    if len(sec) < 3:
+        return 0.0
+    outline = [np.asarray(p, float) for p in q2]
+    if sum(outline[i][0] * outline[(i + 1) % 4][1] - outline[(i + 1) % 4][0] * outline[i][1]
+           for i in range(4)) < 0:
+        outline = outline[::-1]
+    inside = clip_convex(sec, outline)
+    if len(inside) < 3:
+        return 0.0
+    return into_steel(inside, np.array(outline), [inset_quad(np.array(outline), rim_w)])
+
+
 def into_steel(sec, outline, cuts, step=0.5):
     """How deep the flat convex polygon sec lies in a plate's steel: inside the quad
     outline and outside every cut (dense closed contours, taken every ~0.25 mm). Sampled
@@ -665,7 +694,7 @@ def into_steel(sec, outline, cuts, step=0.5):
             xc = a[None, :, 0] + (y - a[None, :, 1]) / (b[None, :, 1] - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0])
         return (np.count_nonzero(cond & (x < xc), axis=1) % 2) == 1
     P = np.vstack([G[inside(S, G)], S])
-    cuts = [np.asarray(cu, float)[::5, :2] for cu in cuts]
+    cuts = [np.asarray(cu, float)[::5 if len(cu) > 50 else 1, :2] for cu in cuts]
     free = np.zeros(len(P), bool)
     for cu in cuts:
         free |= inside(cu, P)
@@ -1196,6 +1225,34 @@ def main(argv=None):
           % (stack_gap[0], stack_gap[1]))
     print("legs through a neighbour's hub plate outside its relief: %d, deepest %.3g mm (%s)"
           % (legs_through, leg_through[0], leg_through[1]))
+    # legs against the rims of the units round their tile's corners (reported, not held)
+    leg_rim = (0.0, None)
+    legs_into_rims = 0
+    faces = frame["mesh"]["faces"]
+    around = {}
+    for ui, fc in enumerate(faces):
+        for vtx in fc:
+            around.setdefault(vtx, []).append(ui)
+    for u1 in range(nu):
+        if hub_pins[u1] is None or neck_folds[u1] is None or u1 >= len(faces):
+            continue
+        near = sorted(set(w for vtx in faces[u1] for w in around[vtx]) - {u1})
+        for j in range(4):
+            leg = leg_plate(flat_tile[u1], cut, float(cut["joint"]), hub_pins[u1][j],
+                            rim_pins[u1][j], neck_folds[u1][j], hub_mot[u1], pri_mot[u1], j)
+            if leg is None:
+                continue
+            for w in near:
+                if cut_plate[w] is None:
+                    continue
+                qw = np.array([apply(pri_mot[w], p) for p in cut_plate[w][0]])
+                d_ = rim_reach_of(leg, qw, float(cut["rim"]), thickness)
+                if d_ > leg_rim[0] or leg_rim[1] is None:
+                    leg_rim = (d_, "%s leg %d into %s" % (uid[u1], j, uid[w]))
+                if d_ > REACH_TOL:
+                    legs_into_rims += 1
+    print("info: legs into a neighbour's rim: %d, deepest %.3g mm (%s) (not held yet)"
+          % (legs_into_rims, leg_rim[0], leg_rim[1]))
     for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
                       ("hub lap", lap_fail), ("lap claim", claim_fail), ("bridge", bridge_fail),
                       ("weld", weld_fail), ("plates into each other", reach_fail),
@@ -1238,6 +1295,8 @@ def main(argv=None):
             "hub_stack_gap_max": stack_gap[0],
             "legs_through_hub_plates": legs_through,
             "leg_through_hub_plate_max": leg_through[0],
+            "legs_into_rims": legs_into_rims,
+            "leg_into_rim_max": leg_rim[0],
             "problems": ["%s: %s: %s" % p for p in struct],
             "failing": {"leg": leg_fail, "pin": pin_fail, "lap": lap_fail, "lap_claim": claim_fail,
                         "bridge": bridge_fail, "weld": weld_fail, "reach": reach_fail,
