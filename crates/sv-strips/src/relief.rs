@@ -4,10 +4,11 @@
 //! lap, one lying on the other. So at every lap one leg of the upper unit runs down through
 //! the lower hub plate (docs/geometry.md 5.5). The lower plate gets a **relief** there: a
 //! notch open to its edge (a closed hole would thread the plate onto the other unit), cut
-//! as one with the hook slot it runs into. It runs along the upper plate's edge, beside the
-//! lap, from past the leg's section to the hub's outline, as wide as the leg's section
-//! across it (the leg at its least-twist roll and turned [`ROLLS_DEG`] either way) plus
-//! [`CLEARANCE`] each side.
+//! as one with the hook slot it runs into. It covers the leg's section through the plate
+//! (the leg as a plate, [`crate::leg_plate`], at its least-twist roll and turned through
+//! [`ROLLS_DEG`]) plus [`CLEARANCE`] each side, and runs straight from there into the slot
+//! the shortest way that stays out from under the upper plate (the lap is not cut), clear
+//! of the hub's necks ([`neck_room`]) and with a web of [`relief_web`] to every other cut.
 
 use std::collections::HashMap;
 
@@ -28,9 +29,9 @@ const DIRECTIONS: usize = 72;
 /// Room between the leg's section and the relief's sides (mm).
 pub const CLEARANCE: Real = 1.0;
 
-/// A relief in a unit's hub plate, in the strip's flat frame: a slot of `width` around the
-/// straight centre line `centre`, from its closed end (past the leg's section) to its open
-/// end (in the hook slot beyond the hub's outline).
+/// A relief in a unit's hub plate, in the strip's flat frame: a straight notch `width`
+/// across, from its round closed end (past the leg's section) to its open end (in the hook
+/// slot beyond the hub's outline).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Relief {
     /// Its outline, clockwise: the closed end's two corners are `outline[3]` and
@@ -234,8 +235,8 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
     Ok(())
 }
 
-/// The relief of `section` (the leg's section, flat, in `lower`'s frame) along the nearest
-/// side of `upper`'s hub plate, out to `lower`'s hub outline and into its hook slot.
+/// The relief of `section` (the leg's section, flat, in `lower`'s frame), out to `lower`'s
+/// hook slots beside `upper`'s hub plate; `None` where no direction keeps to the rules.
 fn relief_for(
     section: &[Point2],
     upper: &Placed,
