@@ -611,11 +611,12 @@ def hull2(P):
     return [np.array(p) for p in lower[:-1] + upper[:-1]]
 
 
-def leg_section(leg, plate, hub_m, t):
-    """The part of the leg slab (quad `leg`, t through) inside the slab of the hub plate
-    `plate` (world quad, t through) and inside its outline, in the plate's flat frame
-    (through its motion `hub_m`); [] when none."""
-    c, n, u, v, q2 = plate_frame(plate)
+def section_inside(leg, plate, t):
+    """The part of the leg slab (quad `leg`, t through) inside the slab of `plate` (world
+    quad, t through) and inside its outline, in the plate's frame: (frame, counter-clockwise
+    outline, section); None when nothing of the leg is there."""
+    pf = plate_frame(plate)
+    c, n, u, v, q2 = pf
     nl = np.cross(leg[2] - leg[0], leg[3] - leg[1])
     nl /= np.linalg.norm(nl)
     corners = [p + nl * o for o in (-t / 2, t / 2) for p in leg]
@@ -629,14 +630,24 @@ def leg_section(leg, plate, hub_m, t):
                 pts.append(corners[i] + (corners[j] - corners[i]) * ((level - h[i]) / (h[j] - h[i])))
     sec = hull2([np.array([np.dot(p - c, u), np.dot(p - c, v)]) for p in pts])
     if len(sec) < 3:
-        return []
+        return None
     outline = [np.asarray(p, float) for p in q2]
     if sum(outline[i][0] * outline[(i + 1) % 4][1] - outline[(i + 1) % 4][0] * outline[i][1]
            for i in range(4)) < 0:
         outline = outline[::-1]
     inside = clip_convex(sec, outline)
     if len(inside) < 3:
+        return None
+    return pf, np.array(outline), inside
+
+
+def leg_section(leg, plate, hub_m, t):
+    """The leg's section through the hub plate `plate` (section_inside), in the plate's flat
+    frame (through its motion `hub_m`); [] when none."""
+    found = section_inside(leg, plate, t)
+    if found is None:
         return []
+    (c, _, u, v, _), _, inside = found
     R, tt = hub_m[0], hub_m[1]
     return [(R.T @ (c + u * p[0] + v * p[1] - tt))[:2] for p in inside]
 
@@ -645,29 +656,11 @@ def rim_reach_of(leg, plate, rim_w, t):
     """How deep the leg plate runs into the rim of the primary plate `plate` (world quad as
     cut, t through): its section through the plate's slab against the band rim_w wide
     inside the plate's outline."""
-    c, n, u, v, q2 = plate_frame(plate)
-    nl = np.cross(leg[2] - leg[0], leg[3] - leg[1])
-    nl /= np.linalg.norm(nl)
-    corners = [p + nl * o for o in (-t / 2, t / 2) for p in leg]
-    edges = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
-             (0, 4), (1, 5), (2, 6), (3, 7)]
-    h = [float(np.dot(p - c, n)) for p in corners]
-    pts = [corners[i] for i in range(8) if abs(h[i]) <= t / 2]
-    for i, j in edges:
-        for level in (-t / 2, t / 2):
-            if (h[i] - level) * (h[j] - level) < 0:
-                pts.append(corners[i] + (corners[j] - corners[i]) * ((level - h[i]) / (h[j] - h[i])))
-    sec = hull2([np.array([np.dot(p - c, u), np.dot(p - c, v)]) for p in pts])
-    if len(sec) < 3:
+    found = section_inside(leg, plate, t)
+    if found is None:
         return 0.0
-    outline = [np.asarray(p, float) for p in q2]
-    if sum(outline[i][0] * outline[(i + 1) % 4][1] - outline[(i + 1) % 4][0] * outline[i][1]
-           for i in range(4)) < 0:
-        outline = outline[::-1]
-    inside = clip_convex(sec, outline)
-    if len(inside) < 3:
-        return 0.0
-    return into_steel(inside, np.array(outline), [inset_quad(np.array(outline), rim_w)])
+    _, outline, inside = found
+    return into_steel(inside, outline, [inset_quad(outline, rim_w)])
 
 
 def into_steel(sec, outline, cuts, step=0.5):

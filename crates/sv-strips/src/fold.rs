@@ -9,7 +9,8 @@ use sv_frame::plates::{edge_to_plate, facing_reach, hinge_turn, lap_heights, pla
 use sv_frame::{CheckReport, CheckRow, FrameFile};
 use sv_geom::{planar, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
 
-use crate::relief::{leg_plate, lift, neck_room, place, section_in_plate, Placed};
+use crate::leg_plate::{flat, lift, place, posed_leg, section_in_plate, section_inside, Placed};
+use crate::relief::neck_room;
 use crate::{ProfileParams, StripRecord, StripsFile};
 
 /// Limits of [`fold_check`] (mm and degrees).
@@ -193,8 +194,8 @@ struct Folded {
     plate: [Point3; 4],
     /// The unit flat and in the world (for its legs as plates).
     placed: Placed,
-    /// Its necks as cut (hub, rim), flat.
-    necks: [[Point2; 4]; 2],
+    /// Its legs as plates (`leg_plate::posed_leg`) on its necks as cut, in the world.
+    legs: [Option<[Point3; 4]>; 4],
     /// Its cuts as cut (slots, with their reliefs), flat, flattened to closed polylines.
     slots: Vec<Vec<[Real; 2]>>,
 }
@@ -301,14 +302,9 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         laps.see(lap, at);
         claims.see((lap - link.hub_overlap).abs(), at);
         for (f, g) in [(fa, fb), (fb, fa)] {
-            for k in 0..4 {
-                let pins = [f.necks[0][k], f.necks[1][k]];
-                let Some(leg) = leg_plate(&f.placed, &widths, k, pins, 0.0) else {
-                    continue;
-                };
-                let section = section_in_plate(&leg, &g.placed, thickness);
-                let d = into_steel(&section, &g.placed.layout.hub, &g.slots);
-                legs_through.see(d, at);
+            for leg in f.legs.iter().flatten() {
+                let section = section_in_plate(leg, &g.placed, thickness);
+                legs_through.see(into_steel(&section, &g.placed.layout.hub, &g.slots), at);
             }
         }
         if let Some((low, high)) = lap_heights(&fa.hub_plate, &fb.hub_plate) {
@@ -397,16 +393,15 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         let mut near: Vec<usize> = face.iter().flat_map(|v| round[v].clone()).collect();
         near.sort_unstable();
         near.dedup();
-        for k in 0..4 {
-            let pins = [f.necks[0][k], f.necks[1][k]];
-            let Some(leg) = leg_plate(&f.placed, &widths, k, pins, 0.0) else {
+        for (k, leg) in f.legs.iter().enumerate() {
+            let Some(leg) = leg else {
                 continue;
             };
             for &w in near.iter().filter(|&&w| w != u) {
                 let Some(g) = folded.get(&w) else {
                     continue;
                 };
-                let depth = rim_reach(&leg, &g.plate, widths.rim, thickness);
+                let depth = rim_reach(leg, &g.plate, widths.rim, thickness);
                 legs_rims.see(depth, || {
                     format!(
                         "unit {} leg {k} into {}",
@@ -518,8 +513,10 @@ fn fold_unit(
             hub_plate,
             tile,
             plate: plate_as_cut(&tile, bridged_insets(strip, u, widths.plate_inset())),
+            legs: std::array::from_fn(|k| {
+                posed_leg(&placed, widths, k, [hub_pins[k], rim_pins[k]], 0.0)
+            }),
             placed,
-            necks: [hub_pins, rim_pins],
             slots,
         },
         Necks {
@@ -575,95 +572,40 @@ fn into_steel(section: &[Point2], outline: &[Point2; 4], cuts: &[Vec<[Real; 2]>]
     if section.len() < 3 {
         return 0.0;
     }
-    let inside = |poly: &[[Real; 2]], p: &Point2| {
-        let mut c = false;
-        for i in 0..poly.len() {
-            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            if (a[1] > p.y) != (b[1] > p.y)
-                && p.x < a[0] + (p.y - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
-            {
-                c = !c;
-            }
-        }
-        c
-    };
-    let to_segment = |a: Point2, b: Point2, p: &Point2| {
-        let e = b - a;
-        let t = ((p - a).dot(&e) / e.norm_squared()).clamp(0.0, 1.0);
-        (a + e * t - p).norm()
-    };
-    let depth = |p: &Point2| {
-        if cuts.iter().any(|c| inside(c, p)) {
+    let outline = flat(outline);
+    let depth = |p: [Real; 2]| {
+        if cuts.iter().any(|c| planar::point_in_polygon(p, c)) {
             return 0.0;
         }
-        let mut d = (0..4)
-            .map(|i| to_segment(outline[i], outline[(i + 1) % 4], p))
-            .fold(Real::INFINITY, Real::min);
-        for c in cuts {
-            for i in 0..c.len() {
-                let (a, b) = (c[i], c[(i + 1) % c.len()]);
-                d = d.min(to_segment(
-                    Point2::new(a[0], a[1]),
-                    Point2::new(b[0], b[1]),
-                    p,
-                ));
-            }
-        }
-        d
+        cuts.iter()
+            .map(|c| planar::boundary_distance(p, c))
+            .fold(planar::boundary_distance(p, &outline), Real::min)
     };
-    // the section's bounding box on a half-millimetre grid, points inside it
-    let (lo, hi) = section.iter().fold(
-        (
-            Point2::new(Real::INFINITY, Real::INFINITY),
-            Point2::new(Real::NEG_INFINITY, Real::NEG_INFINITY),
-        ),
-        |(lo, hi), p| {
-            (
-                Point2::new(lo.x.min(p.x), lo.y.min(p.y)),
-                Point2::new(hi.x.max(p.x), hi.y.max(p.y)),
-            )
-        },
-    );
-    let ring: Vec<[Real; 2]> = section.iter().map(|p| [p.x, p.y]).collect();
+    // the section's corners, and its bounding box on a half-millimetre grid inside it
+    let ring = flat(section);
+    let (lo, hi) = planar::bbox(&ring);
     let step = 0.5;
-    let mut worst = section.iter().map(depth).fold(0.0, Real::max);
     let (nx, ny) = (
-        ((hi.x - lo.x) / step).ceil() as usize,
-        ((hi.y - lo.y) / step).ceil() as usize,
+        ((hi[0] - lo[0]) / step).ceil() as usize,
+        ((hi[1] - lo[1]) / step).ceil() as usize,
     );
-    for i in 0..=nx {
-        for j in 0..=ny {
-            let p = Point2::new(lo.x + i as Real * step, lo.y + j as Real * step);
-            if inside(&ring, &p) {
-                worst = worst.max(depth(&p));
-            }
-        }
-    }
-    worst
+    let grid = (0..=nx).flat_map(|i| (0..=ny).map(move |j| (i, j)));
+    grid.map(|(i, j)| [lo[0] + i as Real * step, lo[1] + j as Real * step])
+        .filter(|p| planar::point_in_polygon(*p, &ring))
+        .chain(ring.iter().copied())
+        .map(depth)
+        .fold(0.0, Real::max)
 }
 
 /// How deep the leg plate `leg` runs into the rim of the primary plate `plate` (as cut,
 /// `thickness` through): its section through the plate's slab, against the band `rim` wide
 /// inside the plate's outline.
 fn rim_reach(leg: &[Point3; 4], plate: &[Point3; 4], rim: Real, thickness: Real) -> Real {
-    let Some((c, _, u, v)) = crate::leg_plate::frame(plate) else {
+    let Some((_, outline, inside)) = section_inside(leg, plate, thickness) else {
         return 0.0;
     };
-    let section = crate::leg_plate::section_in_slab(leg, plate, thickness);
-    if section.len() < 3 {
-        return 0.0;
-    }
-    let mut outline = plate.map(|p| Point2::new((p - c).dot(&u), (p - c).dot(&v)));
-    if crate::leg_plate::area(&outline) < 0.0 {
-        outline.reverse();
-    }
     let Some(open) = sv_unit::inset(&outline, rim) else {
         return 0.0;
     };
-    let inside = crate::leg_plate::clip_convex(&section, &outline);
-    into_steel(
-        &inside,
-        &outline,
-        &[open.iter().map(|p| [p.x, p.y]).collect()],
-    )
+    into_steel(&inside, &outline, &[flat(&open)])
 }

@@ -7,8 +7,11 @@
 //! about its pin line until each neck's fold line, as the leg carries it, lies as near as it
 //! can to the same fold line as the plate at the other side of the neck carries it.
 
-use sv_geom::{Isometry3, Point2, Point3, Real, Vector3};
+use sv_frame::FrameFile;
+use sv_geom::{planar, rigid_fit, Isometry3, Point2, Point3, Real, Vector3};
 use sv_unit::{inset, CutWidths, UnitLayout};
+
+use crate::plane::convex_hull;
 
 /// The body of leg `k` in the flat: the band between the slots along side `k`, from its hub
 /// neck to where slot `k` crosses its end (counter-clockwise quad). The necks' webs and the
@@ -138,11 +141,14 @@ pub fn section_in_slab(leg: &[Point3; 4], plate: &[Point3; 4], thickness: Real) 
         .iter()
         .map(|p| Point2::new((p - c).dot(&u), (p - c).dot(&v)))
         .collect();
-    hull(flat)
+    convex_hull(&flat)
 }
 
+/// A plate's centre, unit normal and in-plane axes.
+pub type PlateFrame = (Point3, Vector3, Vector3, Vector3);
+
 /// The plate's centre, unit normal and in-plane axes.
-pub fn frame(q: &[Point3; 4]) -> Option<(Point3, Vector3, Vector3, Vector3)> {
+pub fn frame(q: &[Point3; 4]) -> Option<PlateFrame> {
     let c = Point3::from(q.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / 4.0);
     let n = (q[2] - q[0]).cross(&(q[3] - q[1])).try_normalize(1e-12)?;
     let u = (q[1] - q[0]) - n * (q[1] - q[0]).dot(&n);
@@ -150,61 +156,147 @@ pub fn frame(q: &[Point3; 4]) -> Option<(Point3, Vector3, Vector3, Vector3)> {
     Some((c, n, u, n.cross(&u)))
 }
 
-/// Convex hull, counter-clockwise (Andrew's monotone chain).
-pub fn hull(mut p: Vec<Point2>) -> Vec<Point2> {
-    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    p.dedup_by(|a, b| (*a - *b).norm() < 1e-12);
-    if p.len() < 3 {
-        return p;
+/// Signed area of a polygon (positive counter-clockwise; [`sv_geom::planar::polygon_area`]).
+pub(crate) fn area(p: &[Point2]) -> Real {
+    planar::polygon_area(&flat(p))
+}
+
+/// The part of convex polygon `p` inside convex counter-clockwise polygon `clip`
+/// ([`sv_geom::planar::convex_clip`]).
+pub(crate) fn clip_convex(p: &[Point2], clip: &[Point2]) -> Vec<Point2> {
+    planar::convex_clip(&flat(p), &flat(clip))
+        .into_iter()
+        .map(|q| Point2::new(q[0], q[1]))
+        .collect()
+}
+
+pub(crate) fn flat(p: &[Point2]) -> Vec<[Real; 2]> {
+    p.iter().map(|q| [q.x, q.y]).collect()
+}
+
+/// One unit, flat (in its strip's frame) and in the world.
+pub(crate) struct Placed {
+    pub layout: UnitLayout,
+    /// Flat to world, for the hub plate and for the primary plate.
+    pub hub: Isometry3,
+    pub primary: Isometry3,
+    /// The hub plate as cut, in the world.
+    pub hub_plate: [Point3; 4],
+}
+
+pub(crate) fn lift(p: &Point2) -> Point3 {
+    Point3::new(p.x, p.y, 0.0)
+}
+
+/// `q` scaled by `e` about its centroid.
+pub(crate) fn expanded(q: &[[Real; 3]; 4], e: Real) -> [Point3; 4] {
+    let p3 = |a: &[Real; 3]| Vector3::new(a[0], a[1], a[2]);
+    let c = q.iter().fold(Vector3::zeros(), |a, p| a + p3(p)) / 4.0;
+    q.map(|p| Point3::from(c + (p3(&p) - c) * e))
+}
+
+/// Unit `u`'s flat tile `tile` put where frame.json has it.
+pub(crate) fn place(
+    frame: &FrameFile,
+    u: usize,
+    tile: &[Point2; 4],
+    widths: &CutWidths,
+) -> Result<Placed, String> {
+    let unit = frame
+        .units
+        .get(u)
+        .ok_or_else(|| format!("frame.json has no unit {u}"))?;
+    let e = frame.params.expansion;
+    let layout = UnitLayout::new(tile, widths).map_err(|e| e.0)?;
+    let flat3 = tile.map(|p| lift(&p));
+    let (primary, res_p) =
+        rigid_fit(&flat3, &expanded(&unit.primary, e)).ok_or("the primary tile is degenerate")?;
+    let (hub, res_h) = rigid_fit(&flat3, &expanded(&unit.hub, e)).ok_or("the hub is degenerate")?;
+    if res_p.max(res_h) > 0.01 {
+        return Err(format!(
+            "its flat tile is not congruent to frame.json's tiles ({:.3} mm off)",
+            res_p.max(res_h)
+        ));
     }
-    let turn = |o: &Point2, a: &Point2, b: &Point2| (a - o).perp(&(b - o));
-    let chain = |pts: &mut dyn Iterator<Item = Point2>| {
-        let mut c: Vec<Point2> = Vec::new();
-        for q in pts {
-            while c.len() >= 2 && turn(&c[c.len() - 2], &c[c.len() - 1], &q) <= 0.0 {
-                c.pop();
-            }
-            c.push(q);
-        }
-        c.pop();
-        c
+    let hub_plate = layout.hub.map(|p| hub * lift(&p));
+    Ok(Placed {
+        layout,
+        hub,
+        primary,
+        hub_plate,
+    })
+}
+
+/// Leg `k` of a placed unit as a plate (its body's mid-plane quad in the world) with its
+/// pins at `pins` (flat hub pin, flat rim pin), turned `roll` (radians) from its least
+/// twist roll.
+pub(crate) fn posed_leg(
+    p: &Placed,
+    widths: &CutWidths,
+    k: usize,
+    pins: [Point2; 2],
+    roll: Real,
+) -> Option<[Point3; 4]> {
+    let flat_dir = |n: &[Point2; 2]| {
+        let d = (n[1] - n[0]).normalize();
+        Vector3::new(d.x, d.y, 0.0)
     };
-    let mut lower = chain(&mut p.iter().copied());
-    let upper = chain(&mut p.iter().rev().copied());
-    lower.extend(upper);
-    lower
+    // turned about its pin line so that its two necks' fold lines, as the leg carries them,
+    // lie as near as they can to the same lines as the hub and the rim carry them (the hub
+    // neck's fold line runs along the leg in the flat, so it alone cannot set the roll)
+    let fh = flat_dir(&p.layout.hub_necks[k]);
+    let fr = flat_dir(&p.layout.rim_necks[k]);
+    let (hw, rw) = (p.hub * lift(&pins[0]), p.primary * lift(&pins[1]));
+    let (pose, _) = leg_pose(
+        pins[0],
+        pins[1],
+        hw,
+        rw,
+        &[(fh, p.hub * fh), (fr, p.primary * fr)],
+    )?;
+    let axis = nalgebra::Unit::new_normalize(rw - hw);
+    let turn = nalgebra::UnitQuaternion::from_axis_angle(&axis, roll);
+    let about = Isometry3::from_parts((hw.coords - turn * hw.coords).into(), turn);
+    let outline = leg_outline(&p.layout, widths, k)?;
+    Some(outline.map(|q| about * (pose * lift(&q))))
 }
 
-/// The part of convex polygon `p` inside convex counter-clockwise polygon `clip`.
-pub fn clip_convex(p: &[Point2], clip: &[Point2]) -> Vec<Point2> {
-    let mut out = p.to_vec();
-    for i in 0..clip.len() {
-        if out.is_empty() {
-            break;
-        }
-        let (a, b) = (clip[i], clip[(i + 1) % clip.len()]);
-        let side = |q: &Point2| (b - a).perp(&(q - a));
-        let input = std::mem::take(&mut out);
-        for j in 0..input.len() {
-            let (p0, p1) = (input[j], input[(j + 1) % input.len()]);
-            let (s0, s1) = (side(&p0), side(&p1));
-            if s0 >= 0.0 {
-                out.push(p0);
-            }
-            if (s0 >= 0.0) != (s1 >= 0.0) {
-                out.push(p0 + (p1 - p0) * (s0 / (s0 - s1)));
-            }
-        }
+/// The part of the leg's section through `plate`'s slab ([`section_in_slab`]) that lies
+/// inside the plate's outline, with that outline, both in the plate's frame `(c, u, v)`
+/// (counter-clockwise); `None` when nothing of it does.
+pub(crate) fn section_inside(
+    leg: &[Point3; 4],
+    plate: &[Point3; 4],
+    thickness: Real,
+) -> Option<(PlateFrame, [Point2; 4], Vec<Point2>)> {
+    let f = frame(plate)?;
+    let (c, _, u, v) = f;
+    let section = section_in_slab(leg, plate, thickness);
+    if section.len() < 3 {
+        return None;
     }
-    out
+    let mut outline = plate.map(|p| Point2::new((p - c).dot(&u), (p - c).dot(&v)));
+    if area(&outline) < 0.0 {
+        outline.reverse();
+    }
+    let inside = clip_convex(&section, &outline);
+    (inside.len() >= 3 && area(&inside) >= 1e-3).then_some((f, outline, inside))
 }
 
-/// Area of a polygon (positive counter-clockwise).
-pub fn area(p: &[Point2]) -> Real {
-    (0..p.len())
-        .map(|i| p[i].coords.perp(&p[(i + 1) % p.len()].coords))
-        .sum::<Real>()
-        / 2.0
+/// The section of `leg` through the hub plate of `lower` where it lies inside that plate,
+/// in `lower`'s flat frame (empty when it does not).
+pub(crate) fn section_in_plate(leg: &[Point3; 4], lower: &Placed, thickness: Real) -> Vec<Point2> {
+    let Some(((c, _, u, v), _, inside)) = section_inside(leg, &lower.hub_plate, thickness) else {
+        return Vec::new();
+    };
+    let inverse = lower.hub.inverse();
+    inside
+        .iter()
+        .map(|p| {
+            let q = inverse * (c + u * p.x + v * p.y);
+            Point2::new(q.x, q.y)
+        })
+        .collect()
 }
 
 #[cfg(test)]

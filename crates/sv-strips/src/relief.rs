@@ -13,10 +13,12 @@
 use std::collections::HashMap;
 
 use sv_frame::FrameFile;
-use sv_geom::{rigid_fit, Isometry3, Point2, Point3, Real, Vector2, Vector3};
-use sv_unit::{CutWidths, UnitLayout};
+use sv_geom::planar::{point_segment_distance, segment_distance};
+use sv_geom::{Point2, Point3, Real, Vector2};
+use sv_unit::CutWidths;
 
-use crate::leg_plate::{area, clip_convex, frame, hull, leg_outline, leg_pose, section_in_slab};
+use crate::leg_plate::{area, clip_convex, place, posed_leg, section_in_plate, Placed};
+use crate::plane::convex_hull;
 use crate::{FlatStrip, StripsError};
 
 /// The leg's roll about its pin line is the one that twists its necks least; the relief
@@ -47,125 +49,6 @@ pub struct Relief {
     pub leg: usize,
 }
 
-/// One unit, flat (in its strip's frame) and in the world.
-pub(crate) struct Placed {
-    pub layout: UnitLayout,
-    /// Flat to world, for the hub plate and for the primary plate.
-    pub hub: Isometry3,
-    pub primary: Isometry3,
-    /// The hub plate as cut, in the world.
-    pub hub_plate: [Point3; 4],
-}
-
-pub(crate) fn lift(p: &Point2) -> Point3 {
-    Point3::new(p.x, p.y, 0.0)
-}
-
-/// `q` scaled by `e` about its centroid.
-pub(crate) fn expanded(q: &[[Real; 3]; 4], e: Real) -> [Point3; 4] {
-    let p3 = |a: &[Real; 3]| Vector3::new(a[0], a[1], a[2]);
-    let c = q.iter().fold(Vector3::zeros(), |a, p| a + p3(p)) / 4.0;
-    q.map(|p| Point3::from(c + (p3(&p) - c) * e))
-}
-
-/// Unit `u`'s flat tile `tile` put where frame.json has it.
-pub(crate) fn place(
-    frame: &FrameFile,
-    u: usize,
-    tile: &[Point2; 4],
-    widths: &CutWidths,
-) -> Result<Placed, String> {
-    let unit = frame
-        .units
-        .get(u)
-        .ok_or_else(|| format!("frame.json has no unit {u}"))?;
-    let e = frame.params.expansion;
-    let layout = UnitLayout::new(tile, widths).map_err(|e| e.0)?;
-    let flat3 = tile.map(|p| lift(&p));
-    let (primary, res_p) =
-        rigid_fit(&flat3, &expanded(&unit.primary, e)).ok_or("the primary tile is degenerate")?;
-    let (hub, res_h) = rigid_fit(&flat3, &expanded(&unit.hub, e)).ok_or("the hub is degenerate")?;
-    if res_p.max(res_h) > 0.01 {
-        return Err(format!(
-            "its flat tile is not congruent to frame.json's tiles ({:.3} mm off)",
-            res_p.max(res_h)
-        ));
-    }
-    let hub_plate = layout.hub.map(|p| hub * lift(&p));
-    Ok(Placed {
-        layout,
-        hub,
-        primary,
-        hub_plate,
-    })
-}
-
-/// Leg `k` of a placed unit as a plate (its body's mid-plane quad in the world) with its
-/// pins at `pins` (flat hub pin, flat rim pin), turned `roll` (radians) from its least
-/// twist roll.
-pub(crate) fn leg_plate(
-    p: &Placed,
-    widths: &CutWidths,
-    k: usize,
-    pins: [Point2; 2],
-    roll: Real,
-) -> Option<[Point3; 4]> {
-    let flat_dir = |n: &[Point2; 2]| {
-        let d = (n[1] - n[0]).normalize();
-        Vector3::new(d.x, d.y, 0.0)
-    };
-    // turned about its pin line so that its two necks' fold lines, as the leg carries them,
-    // lie as near as they can to the same lines as the hub and the rim carry them (the hub
-    // neck's fold line runs along the leg in the flat, so it alone cannot set the roll)
-    let fh = flat_dir(&p.layout.hub_necks[k]);
-    let fr = flat_dir(&p.layout.rim_necks[k]);
-    let (hw, rw) = (p.hub * lift(&pins[0]), p.primary * lift(&pins[1]));
-    let (pose, _) = leg_pose(
-        pins[0],
-        pins[1],
-        hw,
-        rw,
-        &[(fh, p.hub * fh), (fr, p.primary * fr)],
-    )?;
-    let axis = nalgebra::Unit::new_normalize(rw - hw);
-    let turn = nalgebra::UnitQuaternion::from_axis_angle(&axis, roll);
-    let about = Isometry3::from_parts((hw.coords - turn * hw.coords).into(), turn);
-    let outline = leg_outline(&p.layout, widths, k)?;
-    Some(outline.map(|q| about * (pose * lift(&q))))
-}
-
-/// The section of `leg` through the hub plate of `lower` where it lies inside that plate,
-/// in `lower`'s flat frame (empty when it does not).
-pub(crate) fn section_in_plate(leg: &[Point3; 4], lower: &Placed, thickness: Real) -> Vec<Point2> {
-    let Some((c, _, u, v)) = frame(&lower.hub_plate) else {
-        return Vec::new();
-    };
-    let sec = section_in_slab(leg, &lower.hub_plate, thickness);
-    if sec.len() < 3 {
-        return Vec::new();
-    }
-    let mut outline: Vec<Point2> = lower
-        .hub_plate
-        .iter()
-        .map(|p| Point2::new((p - c).dot(&u), (p - c).dot(&v)))
-        .collect();
-    if area(&outline) < 0.0 {
-        outline.reverse();
-    }
-    let inside = clip_convex(&sec, &outline);
-    if inside.len() < 3 || area(&inside) < 1e-3 {
-        return Vec::new();
-    }
-    let inverse = lower.hub.inverse();
-    inside
-        .iter()
-        .map(|p| {
-            let q = inverse * (c + u * p.x + v * p.y);
-            Point2::new(q.x, q.y)
-        })
-        .collect()
-}
-
 /// Fill `strips[..].reliefs` from the poses in `frame`. Nothing where the frame has no
 /// cut or its joints were not closed (its hub plates do not lie one on the other); no
 /// relief where none can clear a leg (the fold check names that leg).
@@ -179,8 +62,10 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
     if frame.links.iter().all(|l| l.joint.is_none()) {
         return Ok(());
     }
+    let min_web = relief_web(&widths).max(crate::params::min_web(thickness));
+    // every unit placed, and its legs posed at every roll, once
     let mut at: HashMap<usize, (usize, usize)> = HashMap::new();
-    let mut placed: HashMap<usize, Placed> = HashMap::new();
+    let mut placed: HashMap<usize, (Placed, Vec<[Point3; 4]>)> = HashMap::new();
     for (si, s) in strips.iter().enumerate() {
         for (j, (&u, tile)) in s.units.iter().zip(&s.tiles).enumerate() {
             let p = place(frame, u, tile, &widths).map_err(|why| StripsError::Unit {
@@ -188,46 +73,45 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
                 unit: u,
                 why,
             })?;
+            let pins = p.layout.pins();
+            // leg k at roll r is legs[k * ROLLS_DEG.len() + r] (none where it cannot be posed)
+            let legs = (0..4)
+                .flat_map(|k| ROLLS_DEG.iter().map(move |r| (k, r.to_radians())))
+                .map(|(k, r)| posed_leg(&p, &widths, k, [pins.hub[k], pins.rim[k]], r))
+                .collect::<Option<Vec<_>>>()
+                .unwrap_or_default();
             at.insert(u, (si, j));
-            placed.insert(u, p);
+            placed.insert(u, (p, legs));
         }
     }
     for link in &frame.links {
         let [a, b] = link.units;
         for (f, g) in [(a, b), (b, a)] {
-            let (Some(pf), Some(pg)) = (placed.get(&f), placed.get(&g)) else {
+            let (Some((pf, legs)), Some((pg, _))) = (placed.get(&f), placed.get(&g)) else {
                 continue;
             };
-            for k in 0..4 {
-                let pins = pf.layout.pins();
-                let sections: Vec<Point2> = ROLLS_DEG
+            for (k, rolls) in legs.chunks(ROLLS_DEG.len()).enumerate() {
+                let sections: Vec<Point2> = rolls
                     .iter()
-                    .filter_map(|r| {
-                        leg_plate(pf, &widths, k, [pins.hub[k], pins.rim[k]], r.to_radians())
-                    })
-                    .flat_map(|leg| section_in_plate(&leg, pg, thickness))
+                    .flat_map(|leg| section_in_plate(leg, pg, thickness))
                     .collect();
                 if sections.len() < 3 {
                     continue;
                 }
                 let (si, j) = at[&g];
-                let found = relief_for(
-                    &hull(sections),
-                    pf,
-                    pg,
-                    &widths,
-                    relief_web(&widths).max(crate::params::min_web(thickness)),
-                    &strips[si].reliefs[j],
-                );
+                let existing = &strips[si].reliefs[j];
                 // where no notch can clear the leg, none is cut: the fold check names the
                 // leg that runs through the plate there
-                let Some(relief) = found else {
+                let Some((outline, width)) =
+                    relief_for(&convex_hull(&sections), pf, pg, &widths, min_web, existing)
+                else {
                     continue;
                 };
                 strips[si].reliefs[j].push(Relief {
+                    outline,
+                    width,
                     leg_of: f,
                     leg: k,
-                    ..relief
                 });
             }
         }
@@ -235,8 +119,9 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
     Ok(())
 }
 
-/// The relief of `section` (the leg's section, flat, in `lower`'s frame), out to `lower`'s
-/// hook slots beside `upper`'s hub plate; `None` where no direction keeps to the rules.
+/// The outline and width of the relief of `section` (the leg's section, flat, in `lower`'s
+/// frame) out to `lower`'s hook slots beside `upper`'s hub plate ([`Relief`]); `None`
+/// where no direction keeps to the rules.
 fn relief_for(
     section: &[Point2],
     upper: &Placed,
@@ -244,17 +129,24 @@ fn relief_for(
     widths: &CutWidths,
     min_web: Real,
     existing: &[Relief],
-) -> Option<Relief> {
+) -> Option<([Point2; 4], Real)> {
     let inverse = lower.hub.inverse();
-    let to_flat = |p: &Point3| {
-        let q = inverse * p;
-        Point2::new(q.x, q.y)
-    };
-    let up: Vec<Point2> = upper.hub_plate.iter().map(to_flat).collect();
-    let hub = &lower.layout.hub;
+    let up: Vec<Point2> = upper
+        .hub_plate
+        .iter()
+        .map(|p| {
+            let q = inverse * p;
+            Point2::new(q.x, q.y)
+        })
+        .collect();
+    let mut upper_ccw = up.clone();
+    if area(&upper_ccw) < 0.0 {
+        upper_ccw.reverse();
+    }
     let n = section.len() as Real;
     let centre = Point2::from(section.iter().fold(Vector2::zeros(), |s, p| s + p.coords) / n);
-    // the upper plate's side nearest the section
+    // the directions are counted from along the upper plate's side nearest the section,
+    // turning away from that plate
     let side = (0..4).min_by(|&i, &j| {
         let d = |i: usize| {
             let (p, q) = (up[i], up[(i + 1) % 4]);
@@ -263,113 +155,103 @@ fn relief_for(
         d(i).total_cmp(&d(j))
     })?;
     let along = (up[(side + 1) % 4] - up[side]).try_normalize(1e-12)?;
-    // away from the upper plate (and the lap under it)
     let up_centre = Point2::from(up.iter().fold(Vector2::zeros(), |s, p| s + p.coords) / 4.0);
     let mut away = Vector2::new(-along.y, along.x);
     if away.dot(&(centre - up_centre)) < 0.0 {
         away = -away;
     }
-    // out to the centre line of the hook slots round the hub: along the side either way,
-    // or turned away from the lap by up to TURNS; the shortest that keeps clear of the
-    // hub's necks
-    let track = sv_unit::inset(hub, -widths.slot / 2.0)?;
-    let pins = lower.layout.pins();
-    let mut candidates: Vec<(Real, [Point2; 4], Real)> = Vec::new();
-    let mut upper_ccw = up.clone();
-    if area(&upper_ccw) < 0.0 {
-        upper_ccw.reverse();
-    }
+    // the sides run to the centre line of the hook slots round the hub
+    let track = sv_unit::inset(&lower.layout.hub, -widths.slot / 2.0)?;
+    let mut best: Option<(Real, [Point2; 4], Real)> = None;
     for step in 0..DIRECTIONS {
-        {
-            let turn = std::f64::consts::TAU * step as Real / DIRECTIONS as Real;
-            let dir = along * turn.cos() + away * turn.sin();
-            let left = Vector2::new(-dir.y, dir.x);
-            let (w0, w1) = extent(section, &centre, &left);
-            let half = (w1 - w0) / 2.0 + CLEARANCE;
-            let mid = (w0 + w1) / 2.0;
-            let (t0, t1) = extent(section, &centre, &dir);
-            let side = |w: Real| {
-                let p = centre + left * (mid + w);
-                leaves(&track, &p, &dir)
-                    .filter(|&t| t > t1)
-                    .map(|t| p + dir * t)
-            };
-            let base = centre + left * mid + dir * t0;
-            let (Some(b), Some(c)) = (side(half), side(-half)) else {
-                continue;
-            };
-            // both sides end on the straight run of one hook slot along the hub, and the
-            // relief keeps a web of min_web from every other stretch of slot
-            let end = Point2::from((b.coords + c.coords) / 2.0);
-            // beside the lap, not under the upper plate
-            let band = [base + left * half, b, c, base - left * half];
-            let mut band_ccw = band.to_vec();
-            if area(&band_ccw) < 0.0 {
-                band_ccw.reverse();
-            }
-            if area(&clip_convex(&band_ccw, &upper_ccw)).abs() > 1.0 {
-                continue;
-            }
-            let mut runs = 0;
-            let mut webbed = true;
-            for path in &lower.layout.slot_paths {
-                for (i, w) in path.windows(2).enumerate() {
-                    let e = w[1] - w[0];
-                    let at = |p: &Point2| (p - w[0]).dot(&e) / e.norm_squared();
-                    let off = |p: &Point2| e.normalize().perp(&(p - w[0])).abs();
-                    let room = widths.slot / e.norm();
-                    let ends_here = i == 0
-                        && [b, c]
-                            .iter()
-                            .all(|p| off(p) < 1e-6 && at(p) > room && at(p) < 1.0 - room);
-                    if ends_here {
-                        runs += 1;
-                    } else if relief_apart(&base, half, &band, &w[0], &w[1])
-                        < widths.slot / 2.0 + min_web
-                    {
-                        webbed = false;
-                    }
-                }
-            }
-            // and from the reliefs already cut into this plate
-            for r in existing {
-                let [a0, b0, c0, d0] = r.outline;
-                let back = Point2::from((a0.coords + d0.coords) / 2.0);
-                let apart = [(a0, b0), (b0, c0), (c0, d0)]
+        let turn = std::f64::consts::TAU * step as Real / DIRECTIONS as Real;
+        let dir = along * turn.cos() + away * turn.sin();
+        let left = Vector2::new(-dir.y, dir.x);
+        let (w0, w1) = extent(section, &centre, &left);
+        let half = (w1 - w0) / 2.0 + CLEARANCE;
+        let mid = (w0 + w1) / 2.0;
+        let (t0, t1) = extent(section, &centre, &dir);
+        let side = |w: Real| {
+            let p = centre + left * (mid + w);
+            leaves(&track, &p, &dir)
+                .filter(|&t| t > t1)
+                .map(|t| p + dir * t)
+        };
+        let (Some(b), Some(c)) = (side(half), side(-half)) else {
+            continue;
+        };
+        let base = centre + left * mid + dir * t0;
+        let outline = [base + left * half, b, c, base - left * half];
+        let length = (Point2::from((b.coords + c.coords) / 2.0) - base).norm();
+        if best.is_some_and(|(l, _, _)| l <= length) {
+            continue;
+        }
+        if fits(&outline, half, &upper_ccw, lower, widths, min_web, existing) {
+            best = Some((length, outline, 2.0 * half));
+        }
+    }
+    best.map(|(_, outline, width)| (outline, width))
+}
+
+/// Whether the relief `outline` (half width `half`) keeps the rules: not under the upper
+/// plate; both its sides end on the straight run of one hook slot; a web of `min_web` to
+/// every other stretch of slot and to the reliefs `existing`; the neck finder's radius
+/// from every hub neck.
+fn fits(
+    outline: &[Point2; 4],
+    half: Real,
+    upper_ccw: &[Point2],
+    lower: &Placed,
+    widths: &CutWidths,
+    min_web: Real,
+    existing: &[Relief],
+) -> bool {
+    let [a, b, c, d] = *outline;
+    let base = Point2::from((a.coords + d.coords) / 2.0);
+    let end = Point2::from((b.coords + c.coords) / 2.0);
+    let mut band = outline.to_vec();
+    if area(&band) < 0.0 {
+        band.reverse();
+    }
+    if area(&clip_convex(&band, upper_ccw)).abs() > 1.0 {
+        return false;
+    }
+    let mut runs = 0;
+    for path in &lower.layout.slot_paths {
+        for (i, w) in path.windows(2).enumerate() {
+            let e = w[1] - w[0];
+            let at = |p: &Point2| (p - w[0]).dot(&e) / e.norm_squared();
+            let off = |p: &Point2| e.normalize().perp(&(p - w[0])).abs();
+            let room = widths.slot / e.norm();
+            let ends_here = i == 0
+                && [b, c]
                     .iter()
-                    .map(|(p, q)| relief_apart(&base, half, &band, p, q))
-                    .fold(
-                        relief_apart(&base, half, &band, &back, &back) - r.width / 2.0,
-                        Real::min,
-                    );
-                if apart < min_web {
-                    webbed = false;
-                }
-            }
-            if runs != 1 || !webbed {
-                continue;
-            }
-            let clear = pins
-                .hub
-                .iter()
-                .all(|p| distance_to_segment(p, &base, &end) - half > neck_room(widths));
-            if clear {
-                candidates.push((
-                    (end - base).norm(),
-                    [base + left * half, b, c, base - left * half],
-                    2.0 * half,
-                ));
+                    .all(|p| off(p) < 1e-6 && at(p) > room && at(p) < 1.0 - room);
+            if ends_here {
+                runs += 1;
+            } else if relief_apart(&base, half, outline, &w[0], &w[1]) < widths.slot / 2.0 + min_web
+            {
+                return false;
             }
         }
     }
-    candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let (_, outline, width) = candidates.first()?;
-    Some(Relief {
-        outline: *outline,
-        width: *width,
-        leg_of: 0,
-        leg: 0,
-    })
+    let apart_from = |r: &Relief| {
+        let [a0, b0, c0, d0] = r.outline;
+        let back = Point2::from((a0.coords + d0.coords) / 2.0);
+        [(a0, b0), (b0, c0), (c0, d0)]
+            .iter()
+            .map(|(p, q)| relief_apart(&base, half, outline, p, q))
+            .fold(
+                relief_apart(&base, half, outline, &back, &back) - r.width / 2.0,
+                Real::min,
+            )
+    };
+    runs == 1
+        && existing.iter().all(|r| apart_from(r) >= min_web)
+        && lower.layout.pins().hub.iter().all(|p| {
+            point_segment_distance([p.x, p.y], [base.x, base.y], [end.x, end.y]) - half
+                > neck_room(widths)
+        })
 }
 
 /// The least web a relief leaves to any other cut: wider than any neck-like web, halfway
@@ -389,33 +271,16 @@ pub(crate) fn neck_room(widths: &CutWidths) -> Real {
 /// The distance from the segment `p q` to a relief: its sides and open end `band` (A, B,
 /// C, D) and the half disc of radius `half` round `back`.
 fn relief_apart(back: &Point2, half: Real, band: &[Point2; 4], p: &Point2, q: &Point2) -> Real {
+    let a2 = |x: &Point2| [x.x, x.y];
     let [a, b, c, d] = band;
     [(a, b), (b, c), (c, d)]
         .iter()
-        .map(|(u, v)| segments_apart(u, v, p, q))
-        .fold(distance_to_segment(back, p, q) - half, Real::min)
+        .map(|(u, v)| segment_distance(a2(u), a2(v), a2(p), a2(q)))
+        .fold(
+            point_segment_distance(a2(back), a2(p), a2(q)) - half,
+            Real::min,
+        )
         .max(0.0)
-}
-
-/// The distance between the segments `a b` and `c d`.
-fn segments_apart(a: &Point2, b: &Point2, c: &Point2, d: &Point2) -> Real {
-    let crosses = {
-        let s = |p: &Point2, q: &Point2, r: &Point2| (q - p).perp(&(r - p));
-        s(a, b, c) * s(a, b, d) < 0.0 && s(c, d, a) * s(c, d, b) < 0.0
-    };
-    if crosses {
-        return 0.0;
-    }
-    distance_to_segment(a, c, d)
-        .min(distance_to_segment(b, c, d))
-        .min(distance_to_segment(c, a, b))
-        .min(distance_to_segment(d, a, b))
-}
-
-fn distance_to_segment(p: &Point2, a: &Point2, b: &Point2) -> Real {
-    let e = b - a;
-    let t = ((p - a).dot(&e) / e.norm_squared().max(1e-300)).clamp(0.0, 1.0);
-    (a + e * t - p).norm()
 }
 
 /// The least and largest of `(p - o) . d` over `pts`.
