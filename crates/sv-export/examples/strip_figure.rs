@@ -21,10 +21,15 @@ fn main() {
     } else {
         QuadMesh::translational(nx, ny, 300.0, |x| x * x / 40000.0, |y| -y * y / 40000.0)
     };
-    let frame = solve(&mesh, &SolveOptions::default(), &mut |_| {})
+    let params = ProfileParams::default();
+    // the units deploy as they are cut
+    let options = SolveOptions {
+        cut: Some(params.cut_widths()),
+        ..Default::default()
+    };
+    let frame = solve(&mesh, &options, &mut |_| {})
         .expect("solve")
         .to_frame_file(&mesh);
-    let params = ProfileParams::default();
     let t = Instant::now();
     let strips = unroll(&frame, &StripOptions::default()).expect("unroll");
     let labels = unit_labels(&strips, frame.units.len());
