@@ -27,7 +27,7 @@ pub const ROLLS_DEG: [Real; 5] = [-20.0, -10.0, 0.0, 10.0, 20.0];
 /// The directions a relief may run in from the leg's section (evenly spread): the
 /// shortest that stays out from under the upper plate and clear of the necks and the other
 /// cuts is taken.
-const DIRECTIONS: usize = 72;
+const DIRECTIONS: usize = 180;
 /// Room between the leg's section and the relief's sides (mm).
 pub const CLEARANCE: Real = 1.0;
 
