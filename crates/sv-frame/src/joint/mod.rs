@@ -87,8 +87,9 @@ pub struct JointOptions {
     pub pieces: Vec<PieceLength>,
     /// The weight of the rows that keep each leg's end at its rim neck (its last 12 mm) and
     /// the primary plates of its unit's links out of each other, as a factor on the plates'
-    /// own collision rows (in the last stage of their stiffness); 0 leaves them out (and
-    /// the solve as it was without them, bit for bit). Default 0.1 (docs/geometry.md 6.5).
+    /// own collision rows (in the last stage of their stiffness); 0 (the default) leaves
+    /// them out, and the solve as it was without them, bit for bit. A study option: at 0.1
+    /// they clear some of those legs and leave joints open elsewhere (docs/geometry.md 5.5).
     pub leg_ends: Real,
 }
 
@@ -118,7 +119,7 @@ impl Default for JointOptions {
             bridge_room: 15.0,
             thickness: 2.5,
             pieces: Vec::new(),
-            leg_ends: 0.1,
+            leg_ends: 0.0,
         }
     }
 }
