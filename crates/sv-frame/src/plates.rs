@@ -2,7 +2,9 @@
 //! bend and twist of a hinge between them. The solve aims at them and the fold check
 //! measures them, on the same definitions.
 
-use sv_geom::{segment_closest, Point3, Real, Vector3};
+use sv_geom::{
+    segment_closest, Isometry3, Point2, Point3, Real, Rotation3, UnitQuaternion, Vector3,
+};
 
 /// Unit normal of a convex quad plate, `(q2 - q0) x (q3 - q1)`; `None` when degenerate.
 pub fn plate_normal(q: &[Point3; 4]) -> Option<Vector3> {
@@ -256,6 +258,53 @@ pub fn hinge_turn(a: &[Point3; 4], k: usize, b: &[Point3; 4], m: usize) -> (Real
     (bend, twist)
 }
 
+/// Where leg `k` lies: the motion from the flat to the world that puts its hub pin
+/// `hub_pin` on `hub_world` and its rim pin on the line to `rim_world`, turned about that
+/// line to twist its necks least; and each neck's twist (radians, hub then rim). `folds`:
+/// each neck's fold line in the flat and as the plate at its other side carries it in the
+/// world. The fold check poses its leg plates so, the joint solve its legs' rim ends.
+pub fn leg_pose(
+    hub_pin: Point2,
+    rim_pin: Point2,
+    hub_world: Point3,
+    rim_world: Point3,
+    folds: &[(Vector3, Vector3)],
+) -> Option<(Isometry3, Vec<Real>)> {
+    let e1 = (rim_pin - hub_pin).try_normalize(1e-12)?;
+    let e1 = Vector3::new(e1.x, e1.y, 0.0);
+    let e2 = Vector3::z().cross(&e1);
+    let a = (rim_world - hub_world).try_normalize(1e-12)?;
+    let b0 = a
+        .cross(&Vector3::z())
+        .try_normalize(1e-6)
+        .unwrap_or_else(|| {
+            a.cross(&Vector3::x())
+                .try_normalize(1e-12)
+                .unwrap_or(Vector3::y())
+        });
+    let c0 = a.cross(&b0);
+    // the leg takes a flat vector f to (f.e1) a + (f.e2) b; the roll of b maximises the
+    // agreement of each fold line as the leg carries it with the same as its plate does
+    let (mut sc, mut ss) = (0.0, 0.0);
+    for (flat, world) in folds {
+        let f2 = flat.dot(&e2);
+        sc += f2 * b0.dot(world);
+        ss += f2 * c0.dot(world);
+    }
+    let psi = ss.atan2(sc);
+    let b = b0 * psi.cos() + c0 * psi.sin();
+    let rotation = Rotation3::from_basis_unchecked(&[a, b, a.cross(&b)])
+        * Rotation3::from_basis_unchecked(&[e1, e2, Vector3::z()]).transpose();
+    let rotation = UnitQuaternion::from_rotation_matrix(&rotation);
+    let translation = hub_world.coords - rotation * Vector3::new(hub_pin.x, hub_pin.y, 0.0);
+    let motion = Isometry3::from_parts(translation.into(), rotation);
+    let twist = folds
+        .iter()
+        .map(|(flat, world)| (rotation * flat).angle(world))
+        .collect();
+    Some((motion, twist))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -267,6 +316,28 @@ mod tests {
             Point3::new(x0 + 1.0, 1.0, z),
             Point3::new(x0, 1.0, z),
         ]
+    }
+
+    /// A leg posed between two world pins puts its hub pin on the first exactly, its rim pin
+    /// on the line to the second, and a fold line that the plate carries the same way as
+    /// the leg can lie in the leg: no twist.
+    #[test]
+    fn a_leg_lies_on_its_pins_and_takes_a_fold_line_it_can_hold() {
+        let (hp, rp) = (Point2::new(10.0, 5.0), Point2::new(210.0, 5.0));
+        let (hw, rw) = (
+            Point3::new(0.0, 0.0, 100.0),
+            Point3::new(120.0, 80.0, -40.0),
+        );
+        // a fold line across the leg in the flat; in the world, across the pin line
+        let axis = (rw - hw).normalize();
+        let across = axis.cross(&Vector3::z()).normalize();
+        let flat_fold = Vector3::y();
+        let (pose, twist) =
+            leg_pose(hp, rp, hw, rw, &[(flat_fold, across), (flat_fold, across)]).unwrap();
+        assert!((pose * Point3::new(hp.x, hp.y, 0.0) - hw).norm() < 1e-9);
+        let r = pose * Point3::new(rp.x, rp.y, 0.0);
+        assert!((r - hw).normalize().cross(&axis).norm() < 1e-9);
+        assert!(twist.iter().all(|t| t.abs() < 1e-9), "{twist:?}");
     }
 
     #[test]

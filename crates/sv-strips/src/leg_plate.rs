@@ -7,86 +7,12 @@
 //! about its pin line until each neck's fold line, as the leg carries it, lies as near as it
 //! can to the same fold line as the plate at the other side of the neck carries it.
 
+use sv_frame::plates::leg_pose;
 use sv_frame::FrameFile;
 use sv_geom::{planar, rigid_fit, Isometry3, Point2, Point3, Real, Vector3};
-use sv_unit::{inset, CutWidths, UnitLayout};
+use sv_unit::{leg_outline, CutWidths, UnitLayout};
 
 use crate::plane::convex_hull;
-
-/// The body of leg `k` in the flat: the band between the slots along side `k`, from its hub
-/// neck to where slot `k` crosses its end (counter-clockwise quad). The necks' webs and the
-/// slots' round ends are left out.
-pub fn leg_outline(layout: &UnitLayout, w: &CutWidths, k: usize) -> Option<[Point2; 4]> {
-    let q = &layout.plate;
-    let outer = inset(q, w.rim + w.slot)?;
-    let inner = inset(q, w.rim + w.slot + w.leg)?;
-    let k1 = (k + 1) % 4;
-    let d = (q[k1] - q[k]).normalize();
-    let along = |p: Point2| (p - outer[k]).dot(&d);
-    let neck = &layout.hub_necks[k];
-    let start = along(Point2::from((neck[0].coords + neck[1].coords) / 2.0));
-    let end = along(layout.slot_paths[k][1]) - w.slot / 2.0;
-    if end <= start {
-        return None;
-    }
-    let on = |line: &[Point2; 4], t: Real| {
-        let e = (line[k1] - line[k]).normalize();
-        // the point of `line`'s side k at `t` along d from outer[k]
-        let s = (t - (line[k] - outer[k]).dot(&d)) / e.dot(&d);
-        line[k] + e * s
-    };
-    Some([
-        on(&outer, start),
-        on(&outer, end),
-        on(&inner, end),
-        on(&inner, start),
-    ])
-}
-
-/// Where leg `k` lies: the motion from the flat to the world that puts its hub pin
-/// `hub_pin` on `hub_world` and its rim pin on the line to `rim_world`, turned about that
-/// line to twist its necks least; and each neck's twist (radians, hub then rim).
-pub fn leg_pose(
-    hub_pin: Point2,
-    rim_pin: Point2,
-    hub_world: Point3,
-    rim_world: Point3,
-    folds: &[(Vector3, Vector3)],
-) -> Option<(Isometry3, Vec<Real>)> {
-    let e1 = (rim_pin - hub_pin).try_normalize(1e-12)?;
-    let e1 = Vector3::new(e1.x, e1.y, 0.0);
-    let e2 = Vector3::z().cross(&e1);
-    let a = (rim_world - hub_world).try_normalize(1e-12)?;
-    let b0 = a
-        .cross(&Vector3::z())
-        .try_normalize(1e-6)
-        .unwrap_or_else(|| {
-            a.cross(&Vector3::x())
-                .try_normalize(1e-12)
-                .unwrap_or(Vector3::y())
-        });
-    let c0 = a.cross(&b0);
-    // the leg takes a flat vector f to (f.e1) a + (f.e2) b; the roll of b maximises the
-    // agreement of each fold line as the leg carries it with the same as its plate does
-    let (mut sc, mut ss) = (0.0, 0.0);
-    for (flat, world) in folds {
-        let f2 = flat.dot(&e2);
-        sc += f2 * b0.dot(world);
-        ss += f2 * c0.dot(world);
-    }
-    let psi = ss.atan2(sc);
-    let b = b0 * psi.cos() + c0 * psi.sin();
-    let rotation = nalgebra::Rotation3::from_basis_unchecked(&[a, b, a.cross(&b)])
-        * nalgebra::Rotation3::from_basis_unchecked(&[e1, e2, Vector3::z()]).transpose();
-    let rotation = nalgebra::UnitQuaternion::from_rotation_matrix(&rotation);
-    let translation = hub_world.coords - rotation * Vector3::new(hub_pin.x, hub_pin.y, 0.0);
-    let motion = Isometry3::from_parts(translation.into(), rotation);
-    let twist = folds
-        .iter()
-        .map(|(flat, world)| (rotation * flat).angle(world))
-        .collect();
-    Some((motion, twist))
-}
 
 /// The outline, seen along `plate`'s normal, of the part of the slab `leg` (a flat quad in
 /// the world, `thickness` through) that lies within the slab of `plate` (its mid-plane
@@ -302,28 +228,6 @@ pub(crate) fn section_in_plate(leg: &[Point3; 4], lower: &Placed, thickness: Rea
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A leg posed between two world pins puts its hub pin on the first exactly, its rim pin
-    /// on the line to the second, and a fold line that the plate carries the same way as
-    /// the leg can lie in the leg: no twist.
-    #[test]
-    fn a_leg_lies_on_its_pins_and_takes_a_fold_line_it_can_hold() {
-        let (hp, rp) = (Point2::new(10.0, 5.0), Point2::new(210.0, 5.0));
-        let (hw, rw) = (
-            Point3::new(0.0, 0.0, 100.0),
-            Point3::new(120.0, 80.0, -40.0),
-        );
-        // a fold line across the leg in the flat; in the world, across the pin line
-        let axis = (rw - hw).normalize();
-        let across = axis.cross(&Vector3::z()).normalize();
-        let flat_fold = Vector3::y();
-        let (pose, twist) =
-            leg_pose(hp, rp, hw, rw, &[(flat_fold, across), (flat_fold, across)]).unwrap();
-        assert!((pose * Point3::new(hp.x, hp.y, 0.0) - hw).norm() < 1e-9);
-        let r = pose * Point3::new(rp.x, rp.y, 0.0);
-        assert!((r - hw).normalize().cross(&axis).norm() < 1e-9);
-        assert!(twist.iter().all(|t| t.abs() < 1e-9), "{twist:?}");
-    }
 
     /// A leg 15 mm wide standing square through a plate's 2.5 mm slab: its section is the
     /// leg's 15 x 2.5 mm cross-section.

@@ -223,6 +223,37 @@ impl UnitLayout {
     }
 }
 
+/// The body of leg `k` in the flat: the band between the slots along side `k`, from its hub
+/// neck to where slot `k` crosses its end (counter-clockwise quad). The necks' webs and the
+/// slots' round ends are left out. The fold check poses it as a plate, the joint solve keeps
+/// its end near the rim out of the neighbouring plates.
+pub fn leg_outline(layout: &UnitLayout, w: &CutWidths, k: usize) -> Option<[Point2; 4]> {
+    let q = &layout.plate;
+    let outer = inset(q, w.rim + w.slot)?;
+    let inner = inset(q, w.rim + w.slot + w.leg)?;
+    let k1 = (k + 1) % 4;
+    let d = (q[k1] - q[k]).normalize();
+    let along = |p: Point2| (p - outer[k]).dot(&d);
+    let neck = &layout.hub_necks[k];
+    let start = along(Point2::from((neck[0].coords + neck[1].coords) / 2.0));
+    let end = along(layout.slot_paths[k][1]) - w.slot / 2.0;
+    if end <= start {
+        return None;
+    }
+    let on = |line: &[Point2; 4], t: Real| {
+        let e = (line[k1] - line[k]).normalize();
+        // the point of `line`'s side k at `t` along d from outer[k]
+        let s = (t - (line[k] - outer[k]).dot(&d)) / e.dot(&d);
+        line[k] + e * s
+    };
+    Some([
+        on(&outer, start),
+        on(&outer, end),
+        on(&inner, end),
+        on(&inner, start),
+    ])
+}
+
 /// Where the legs are pinned, in the flat unit's frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pins {

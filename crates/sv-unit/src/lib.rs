@@ -37,7 +37,7 @@ mod error;
 mod kinematics;
 mod linkage;
 
-pub use cut::{inset, inset_sides, CutError, CutWidths, Pins, UnitLayout};
+pub use cut::{inset, inset_sides, leg_outline, CutError, CutWidths, Pins, UnitLayout};
 pub use error::UnitError;
 pub use kinematics::{
     axis, deploy, depth_squared, inverse, primary_in_hub_frame, rotation, AxisCase, CornerJacobian,

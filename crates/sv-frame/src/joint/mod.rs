@@ -11,6 +11,8 @@
 //!   plane, twist kept within its limit), so the joint is a fold about that line;
 //! - **welds** (primary plates of neighbouring strips): the facing sides meet at a point,
 //!   and neither plate passes through the other;
+//! - with [`JointOptions::leg_ends`], the last 12 mm of each leg at its rim neck and the
+//!   other primary plate of each link at its corners: neither reaches into the other;
 //! - **hub laps** of at least the weld minimum;
 //! - the hub mesh: faces planar, vertices on the target's tangent plane (and boundary line)
 //!   where they started, a light pull back along the surface.
@@ -32,7 +34,7 @@ use crate::{
 };
 use piece::{Join, Piece};
 pub(crate) use problem::joint_record;
-use problem::{edge_ratio, side_links, stacking, Problem, UNIT_COLUMNS};
+use problem::{edge_ratio, side_links, stacking, Problem, LEG_ENDS_STIFFNESS, UNIT_COLUMNS};
 use unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints};
 
 /// The target surface the hub mesh stays on.
@@ -83,6 +85,12 @@ pub struct JointOptions {
     /// The strip pieces as the strips stage plans them: none grows longer than its sheet
     /// lets it.
     pub pieces: Vec<PieceLength>,
+    /// The weight of the rows that keep each leg's end at its rim neck (its last 12 mm) and
+    /// the primary plates of its unit's links out of each other, as a factor on the plates'
+    /// own collision rows (in the last stage of their stiffness); 0 (the default) leaves
+    /// them out, and the solve as it was without them, bit for bit. A study option: at 0.1
+    /// they clear some of those legs and leave joints open elsewhere (docs/geometry.md 5.5).
+    pub leg_ends: Real,
 }
 
 /// A strip piece as the strips stage plans it before the joints close.
@@ -111,6 +119,7 @@ impl Default for JointOptions {
             bridge_room: 15.0,
             thickness: 2.5,
             pieces: Vec::new(),
+            leg_ends: 0.0,
         }
     }
 }
@@ -393,6 +402,8 @@ pub fn close_joints(
             expansion: solved.options.expansion,
             cut: solved.options.cut,
             scale,
+            // posed from the stage where their rows weigh on
+            leg_ends: false,
         },
         options,
         nv,
@@ -483,6 +494,7 @@ pub fn close_joints(
             closing * 2 / 5
         } else {
             problem.stiffness = stiffness;
+            problem.model.leg_ends = options.leg_ends > 0.0 && stiffness >= LEG_ENDS_STIFFNESS;
             closing.saturating_sub(iterations) / (STIFFNESS.len() - stage)
         };
         units = descend(
@@ -668,6 +680,7 @@ mod tests {
         let (mesh, solved, anchors, bridges) = cap();
         let options = JointOptions {
             min_overlap: 200.0, // every lap short: the lap rows act
+            leg_ends: 1.0,
             ..Default::default()
         };
         let scale = 300.0;
@@ -691,6 +704,7 @@ mod tests {
                 expansion: 1.0,
                 cut: solved.options.cut,
                 scale,
+                leg_ends: true,
             },
             options: &options,
             nv,
@@ -716,7 +730,12 @@ mod tests {
             stiffness: 1.0,
             legs: 1.0,
         };
-        let poses = plate_poses(&solved);
+        // link 0's second plate slid 15 mm in under the first's side and a thickness lower:
+        // the legs' ends at that side's corners reach into it
+        let mut poses = plate_poses(&solved);
+        let [f, g] = solved.links[0].faces;
+        let (cf, cg) = (solved.hubs[f].centre, solved.hubs[g].centre);
+        poses[g].t += (cf - cg).normalize() * 15.0 - solved.hubs[g].normal() * 2.5;
         let mut x = vec![0.0; 3 * nv + UNIT_COLUMNS * nf + solved.links.len()];
         for (v, p) in mesh.vertices.iter().enumerate() {
             x[3 * v..3 * v + 3].copy_from_slice(p.coords.as_slice());
