@@ -66,38 +66,70 @@ impl CheckReport {
     }
 }
 
-/// Tracks the worst value of one check.
-struct Worst {
+/// The worst value of one check and where it is: the row of a [`CheckReport`]. A NaN is
+/// the worst and stays; `ok` compares the worst with the limit in the row's sense.
+pub struct Worst {
     name: &'static str,
     limit: Real,
-    worst: Real,
-    at: String,
+    /// `true`: the value must stay at or above the limit (laps), else at or below.
+    at_least: bool,
+    worst: Option<(Real, String)>,
 }
 
 impl Worst {
-    fn new(name: &'static str, limit: Real) -> Self {
+    /// A check whose values must stay at or below `limit`.
+    pub fn max(name: &'static str, limit: Real) -> Self {
         Self {
             name,
             limit,
-            worst: 0.0,
-            at: "-".into(),
+            at_least: false,
+            worst: None,
         }
     }
-    fn see(&mut self, value: Real, at: impl FnOnce() -> String) {
-        // NaN is always the worst, and stays
-        let worse = value.is_nan() || value > self.worst || (self.at == "-" && value >= self.worst);
-        if worse && !self.worst.is_nan() {
-            self.worst = value;
-            self.at = at();
+
+    /// A check whose values must stay at or above `limit`.
+    pub fn min(name: &'static str, limit: Real) -> Self {
+        Self {
+            at_least: true,
+            ..Self::max(name, limit)
         }
     }
-    fn row(self) -> CheckRow {
+
+    /// Take `value`, found where `at` says, if it is the worst so far.
+    pub fn see(&mut self, value: Real, at: impl FnOnce() -> String) {
+        let worse = match &self.worst {
+            None => true,
+            Some((w, _)) if w.is_nan() => false,
+            Some(_) if value.is_nan() => true,
+            Some((w, _)) => {
+                if self.at_least {
+                    value < *w
+                } else {
+                    value > *w
+                }
+            }
+        };
+        if worse {
+            self.worst = Some((value, at()));
+        }
+    }
+
+    /// The row: the worst value (none seen: 0, or infinity for an at-least check, at `-`).
+    pub fn row(self) -> CheckRow {
+        let (worst, at) = self
+            .worst
+            .unwrap_or((if self.at_least { Real::INFINITY } else { 0.0 }, "-".into()));
+        let ok = if self.at_least {
+            worst >= self.limit
+        } else {
+            worst <= self.limit
+        };
         CheckRow {
-            ok: self.worst <= self.limit,
             name: self.name.into(),
-            worst: self.worst,
+            worst,
             limit: self.limit,
-            at: self.at,
+            at,
+            ok,
         }
     }
 }
@@ -174,20 +206,20 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
         vertices: frame.mesh.vertices.iter().map(pt).collect(),
         faces: frame.mesh.faces.clone(),
     };
-    let mut congruent = Worst::new("hub congruent to primary (residual / side)", rel);
-    let mut legs = Worst::new("leg length = side (relative error)", rel);
-    let mut rhombic = Worst::new("primary is a rhombus (relative error)", rel);
-    let mut axis = Worst::new("closed form reproduces hub (mm)", abs);
-    let mut params = Worst::new("theta, phi match the file (rad)", 1e-6);
-    let mut fitted = Worst::new("hub = spun best-fit rhombus of face (mm)", abs);
-    let mut gaps = Worst::new("link gap matches file (mm)", abs);
-    let mut overlaps = Worst::new("hub overlap matches file (mm)", abs);
-    let mut coverage = Worst::new("interior edges without a link", 0.0);
-    let mut orientation = Worst::new("hub and primary same orientation (0/1)", 0.0);
+    let mut congruent = Worst::max("hub congruent to primary (residual / side)", rel);
+    let mut legs = Worst::max("leg length = side (relative error)", rel);
+    let mut rhombic = Worst::max("primary is a rhombus (relative error)", rel);
+    let mut axis = Worst::max("closed form reproduces hub (mm)", abs);
+    let mut params = Worst::max("theta, phi match the file (rad)", 1e-6);
+    let mut fitted = Worst::max("hub = spun best-fit rhombus of face (mm)", abs);
+    let mut gaps = Worst::max("link gap matches file (mm)", abs);
+    let mut overlaps = Worst::max("hub overlap matches file (mm)", abs);
+    let mut coverage = Worst::max("interior edges without a link", 0.0);
+    let mut orientation = Worst::max("hub and primary same orientation (0/1)", 0.0);
     // the unit as cut: legs pin to pin, pins where the cut of the tile puts them
     let cut = frame.params.cut;
-    let mut pinned = Worst::new("leg pin to pin = its length as cut (mm)", abs);
-    let mut pins_match = Worst::new("pins match the cut of the tile (mm)", abs);
+    let mut pinned = Worst::max("leg pin to pin = its length as cut (mm)", abs);
+    let mut pins_match = Worst::max("pins match the cut of the tile (mm)", abs);
 
     let e = frame.params.expansion;
     let mut expanded: Vec<Option<[Point3; 4]>> = Vec::with_capacity(frame.units.len());
@@ -346,7 +378,7 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
 
     let joints = check_joints(frame, &expanded, &slot);
 
-    let mut planar = Worst::new(
+    let mut planar = Worst::max(
         "face planarity (diagonal distance / mean edge)",
         options.planarity_tolerance,
     );
@@ -356,12 +388,12 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
     // conicality is the paper's stand-in for "the primary tiles can meet"; where the
     // joints were closed on the plates themselves it is shown, not held
     let mut conical = if joints.is_empty() {
-        Worst::new(
+        Worst::max(
             "conical residual (rad, any valence)",
             options.conical_tolerance,
         )
     } else {
-        Worst::new(
+        Worst::max(
             "conical residual (rad; not held: the joints are closed)",
             Real::INFINITY,
         )
@@ -397,8 +429,8 @@ fn check_joints(
         return Vec::new();
     }
     let thickness = frame.params.thickness.unwrap_or(0.0);
-    let mut claims = Worst::new("joint records = the plates in the file (mm, rad)", 1e-6);
-    let mut unrecorded = Worst::new("links without a joint record", 0.0);
+    let mut claims = Worst::max("joint records = the plates in the file (mm, rad)", 1e-6);
+    let mut unrecorded = Worst::max("links without a joint record", 0.0);
     // the plates as cut: half the joint slot off every side a bridge joins
     let half = frame.params.cut.map_or(0.0, |c| c.plate_inset());
     let mut insets = vec![[0.0; 4]; frame.units.len()];
@@ -458,6 +490,36 @@ fn check_joints(
 mod tests {
     use super::*;
     use crate::{solve, SolveOptions};
+
+    /// A row keeps its worst value and where it was, a NaN once seen, and compares with its
+    /// limit in its own sense; with nothing seen it holds.
+    #[test]
+    fn a_row_keeps_its_worst_and_where() {
+        let mut over = Worst::max("over", 2.5);
+        for (v, at) in [(1.0, "a"), (3.0, "b"), (2.0, "c"), (3.0, "d")] {
+            over.see(v, || at.into());
+        }
+        let row = over.row();
+        assert_eq!((row.worst, row.at.as_str(), row.ok), (3.0, "b", false));
+        let mut under = Worst::min("under", 1.5);
+        for (v, at) in [(5.0, "a"), (2.0, "b"), (4.0, "c")] {
+            under.see(v, || at.into());
+        }
+        let row = under.row();
+        assert_eq!((row.worst, row.at.as_str(), row.ok), (2.0, "b", true));
+        let mut nan = Worst::max("nan", 1.0);
+        for (v, at) in [(0.5, "a"), (Real::NAN, "b"), (9.0, "c")] {
+            nan.see(v, || at.into());
+        }
+        let row = nan.row();
+        assert!(row.worst.is_nan() && row.at == "b" && !row.ok);
+        let (none_max, none_min) = (Worst::max("m", 0.0).row(), Worst::min("n", 1.0).row());
+        assert_eq!(
+            (none_max.worst, none_max.at.as_str(), none_max.ok),
+            (0.0, "-", true)
+        );
+        assert!(none_min.worst.is_infinite() && none_min.ok);
+    }
 
     fn solved_cap() -> FrameFile {
         let mesh = QuadMesh::sphere_cap(5, 5, 3000.0, 300.0);

@@ -26,7 +26,7 @@ mod solve;
 mod unit;
 
 pub use check::{
-    check_frame, CheckOptions, CheckReport, CheckRow, GOAL_CONICAL_DEG, GOAL_PLANARITY,
+    check_frame, CheckOptions, CheckReport, CheckRow, Worst, GOAL_CONICAL_DEG, GOAL_PLANARITY,
 };
 pub use error::{FrameError, MeshError};
 pub use file::{

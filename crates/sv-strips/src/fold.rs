@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use sv_frame::plates::{edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut};
-use sv_frame::{CheckReport, CheckRow, FrameFile};
+use sv_frame::{CheckReport, FrameFile, Worst};
 use sv_geom::{planar, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
 
 use crate::leg_plate::{flat, lift, place, posed_leg, section_in_plate, section_inside, Placed};
@@ -54,66 +54,6 @@ impl FoldLimits {
             bridge_span: joints.bridge_gap,
             bridge_bend_deg: joints.bend.to_degrees(),
             bridge_twist_deg: joints.twist.to_degrees(),
-        }
-    }
-}
-
-/// One row: its worst value and where; `ok` compares with the limit in the row's sense.
-struct Row {
-    name: &'static str,
-    limit: Real,
-    /// `true`: the value must stay at or above the limit (laps), else at or below.
-    at_least: bool,
-    worst: Option<(Real, String)>,
-}
-
-impl Row {
-    fn max(name: &'static str, limit: Real) -> Self {
-        Self {
-            name,
-            limit,
-            at_least: false,
-            worst: None,
-        }
-    }
-    fn min(name: &'static str, limit: Real) -> Self {
-        Self {
-            at_least: true,
-            ..Self::max(name, limit)
-        }
-    }
-    fn see(&mut self, value: Real, at: impl FnOnce() -> String) {
-        let worse = match &self.worst {
-            None => true,
-            Some((w, _)) if w.is_nan() => false,
-            Some(_) if value.is_nan() => true,
-            Some((w, _)) => {
-                if self.at_least {
-                    value < *w
-                } else {
-                    value > *w
-                }
-            }
-        };
-        if worse {
-            self.worst = Some((value, at()));
-        }
-    }
-    fn row(self) -> CheckRow {
-        let (worst, at) = self
-            .worst
-            .unwrap_or((if self.at_least { Real::INFINITY } else { 0.0 }, "-".into()));
-        let ok = if self.at_least {
-            worst >= self.limit
-        } else {
-            worst <= self.limit
-        };
-        CheckRow {
-            name: self.name.into(),
-            worst,
-            limit: self.limit,
-            at,
-            ok,
         }
     }
 }
@@ -206,16 +146,16 @@ struct Folded {
 pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -> CheckReport {
     let params = &strips.params.profile;
     let widths = params.cut_widths();
-    let mut pins = Row::max("neck as cut at its pin in frame.json (mm)", limits.pin);
-    let mut legs = Row::max(
+    let mut pins = Worst::max("neck as cut at its pin in frame.json (mm)", limits.pin);
+    let mut legs = Worst::max(
         "leg between its necks, folded into the pose (mm)",
         limits.leg,
     );
-    let mut plates = Row::max(
+    let mut plates = Worst::max(
         "hub plate as cut = frame.json hub_plate (mm)",
         limits.overlap_claim,
     );
-    let mut rebuilt = Row::max("units that cannot be rebuilt from their cut", 0.0);
+    let mut rebuilt = Worst::max("units that cannot be rebuilt from their cut", 0.0);
     let mut folded: HashMap<usize, Folded> = HashMap::new();
     let mut strip_of: HashMap<usize, usize> = HashMap::new();
     let mut unrebuilt = 0.0;
@@ -252,30 +192,30 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             }
         }
     }
-    let mut laps = Row::min("hub lap as cut (mm, smallest)", limits.min_overlap);
-    let mut claims = Row::max(
+    let mut laps = Worst::min("hub lap as cut (mm, smallest)", limits.min_overlap);
+    let mut claims = Worst::max(
         "hub lap = frame.json hub_overlap (mm)",
         limits.overlap_claim,
     );
-    let mut collisions = Row::max(
+    let mut collisions = Worst::max(
         "plates of neighbouring strips reach into each other (mm)",
         limits.collision,
     );
-    let mut welds = Row::max(
+    let mut welds = Worst::max(
         "weld: plates of neighbouring strips apart (mm)",
         limits.weld_gap,
     );
     // turned in their plane, two plates of one strip meet across the joint slot at the end
     // of their sides away from the bridge
-    let mut rims = Row::max(
+    let mut rims = Worst::max(
         "bridge: plates into each other across the slot (mm)",
         limits.collision,
     );
     // the hub plates lap: welded, one lies on the other (the joint solve lifts the hubs off
     // their faces for it), never through it; the wedge between them over the lap is
     // reported (aim: 1.6 mm, not held yet, docs/geometry.md 5.5)
-    let mut through = Row::max("hub plates at a lap into each other (mm)", limits.collision);
-    let mut stacked = Row::max(
+    let mut through = Worst::max("hub plates at a lap into each other (mm)", limits.collision);
+    let mut stacked = Worst::max(
         "hub plates at a lap, widest gap between them (mm; not held)",
         Real::INFINITY,
     );
@@ -283,7 +223,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     // laps: at every lap one leg runs down through the lower plate, through the relief cut
     // for it (docs/geometry.md 5.5); the leg as a plate, its section through the plate,
     // against the plate's steel
-    let mut legs_through = Row::max(
+    let mut legs_through = Worst::max(
         "leg through the neighbour's hub plate, outside its relief (mm)",
         limits.collision,
     );
@@ -340,9 +280,9 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             welds.see(edge_to_plate(pa, &w, pb, thickness).norm(), at);
         }
     }
-    let mut span = Row::max("bridge length folded - flat (mm)", limits.bridge_span);
-    let mut bend = Row::max("bridge bent in its plane (deg)", limits.bridge_bend_deg);
-    let mut twist = Row::max("bridge twisted (deg)", limits.bridge_twist_deg);
+    let mut span = Worst::max("bridge length folded - flat (mm)", limits.bridge_span);
+    let mut bend = Worst::max("bridge bent in its plane (deg)", limits.bridge_bend_deg);
+    let mut twist = Worst::max("bridge twisted (deg)", limits.bridge_twist_deg);
     for strip in &strips.strips {
         for pin in &strip.pins {
             let [a, b] = pin.units;
@@ -376,7 +316,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     // a leg ends at its tile's corner, where the neighbouring tiles' corners are: the leg as
     // a plate against the rims of the units round that corner (inside a rim a primary
     // plate is open: its slots, and the hub and legs that left it)
-    let mut legs_rims = Row::max(
+    let mut legs_rims = Worst::max(
         "leg through a neighbour's rim (mm; not held)",
         Real::INFINITY,
     );
@@ -430,7 +370,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         legs_rims,
     ]
     .into_iter()
-    .map(Row::row)
+    .map(Worst::row)
     .collect();
     CheckReport { rows }
 }
