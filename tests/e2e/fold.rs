@@ -151,6 +151,16 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
             "{name}: {theirs} vs {fig}"
         );
     }
+    // and about as many legs run into the rims (a leg at the limit may fall either side)
+    let line = row(checked, "leg through a neighbour's rim");
+    let theirs: f64 = line
+        .split("; ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count of legs in {line}"));
+    let ours = f(fig, "legs_into_rims");
+    assert!((theirs - ours).abs() <= 2.0, "{line} vs {ours} legs");
 }
 
 /// Issue 14's and 15's joints by our own measure: every bridge of every strip found in the

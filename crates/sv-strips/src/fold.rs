@@ -320,6 +320,8 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         "leg through a neighbour's rim (mm; not held)",
         Real::INFINITY,
     );
+    // how many legs run more than a collision's limit into a rim
+    let mut into_rims = 0;
     let mut round: HashMap<usize, Vec<usize>> = HashMap::new();
     for (u, face) in frame.mesh.faces.iter().enumerate() {
         for &v in face {
@@ -342,6 +344,9 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
                     continue;
                 };
                 let depth = rim_reach(leg, &g.plate, widths.rim, thickness);
+                if depth > limits.collision {
+                    into_rims += 1;
+                }
                 legs_rims.see(depth, || {
                     format!(
                         "unit {} leg {k} into {}",
@@ -351,7 +356,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             }
         }
     }
-    let rows = [
+    let mut rows: Vec<_> = [
         pins,
         legs,
         plates,
@@ -367,11 +372,16 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         through,
         stacked,
         legs_through,
-        legs_rims,
     ]
     .into_iter()
     .map(Worst::row)
     .collect();
+    let mut legs_rims = legs_rims.row();
+    legs_rims.at = format!(
+        "{}; {into_rims} legs over {} mm",
+        legs_rims.at, limits.collision
+    );
+    rows.push(legs_rims);
     CheckReport { rows }
 }
 
