@@ -154,8 +154,8 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
     // and about as many legs run into the rims (a leg at the limit may fall either side)
     let line = row(checked, "leg through a neighbour's rim");
     let theirs: f64 = line
-        .split("; ")
-        .nth(1)
+        .rsplit("; ")
+        .next()
         .and_then(|t| t.split_whitespace().next())
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("no count of legs in {line}"));
