@@ -127,7 +127,6 @@ fn draw(
     }
     let _ = writeln!(s, "</g></g>");
     // the names, each with a leader to a point of the part
-    let mid = |n: &[Point2; 2]| Point2::from((n[0].coords + n[1].coords) / 2.0);
     let centre = Point2::from(tile.iter().fold(Vector2::zeros(), |a, p| a + p.coords) / 4.0);
     let leg = 1;
     let on_rim = {
@@ -142,7 +141,7 @@ fn draw(
     };
     let names = [
         (
-            mid(&layout.rim_necks[leg]),
+            pins.rim[leg],
             format!("rim neck of leg {leg} ({} mm)", params.neck_width),
         ),
         (
@@ -150,7 +149,7 @@ fn draw(
             format!("leg {leg} ({} mm)", params.leg_width),
         ),
         (
-            mid(&layout.hub_necks[leg]),
+            pins.hub[leg],
             format!("hub neck of leg {leg} ({} mm)", params.neck_width),
         ),
         (

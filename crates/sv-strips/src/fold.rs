@@ -7,7 +7,7 @@ use std::collections::HashMap;
 
 use sv_frame::plates::{edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut};
 use sv_frame::{CheckReport, FrameFile, Worst};
-use sv_geom::{planar, segment_closest, Isometry3, Point2, Point3, Real, Vector3};
+use sv_geom::{planar, segment_closest, Point2, Point3, Real, Vector3};
 
 use crate::leg_plate::{flat, lift, place, posed_leg, section_in_plate, section_inside, Placed};
 use crate::relief::neck_room;
@@ -123,16 +123,12 @@ fn bridged_insets(strip: &StripRecord, u: usize, half: Real) -> [Real; 4] {
 
 /// One unit of a strip, flat and folded.
 struct Folded {
-    /// Flat (strip frame) to world, for the primary plate.
-    primary: Isometry3,
-    /// The hub plate as cut, in the world.
-    hub_plate: [Point3; 4],
     /// The primary tile, in the world.
     tile: [Point3; 4],
     /// The primary plate as cut: the tile less half the joint slot where a bridge joins
     /// (the plate reaches the tile's other sides), in the world.
     plate: [Point3; 4],
-    /// The unit flat and in the world (for its legs as plates).
+    /// The unit flat and in the world: its plates' motions, its hub plate as cut.
     placed: Placed,
     /// Its legs as plates (`leg_plate::posed_leg`) on its necks as cut, in the world.
     legs: [Option<[Point3; 4]>; 4],
@@ -179,7 +175,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
                     }
                     if let Some(hp) = frame.units[u].hub_plate {
                         let off = (0..4)
-                            .map(|k| (f.hub_plate[k] - p3(&hp[k])).norm())
+                            .map(|k| (f.placed.hub_plate[k] - p3(&hp[k])).norm())
                             .fold(0.0, Real::max);
                         plates.see(off, name);
                     }
@@ -235,10 +231,10 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             continue;
         };
         let at = || format!("link {li} ({} - {})", frame.units[a].id, frame.units[b].id);
-        let ca = centroid(&fa.hub_plate);
-        let cb = centroid(&fb.hub_plate);
+        let ca = centroid(&fa.placed.hub_plate);
+        let cb = centroid(&fb.placed.hub_plate);
         let dir = (cb - ca).normalize();
-        let lap = (fa.hub_plate[k] - fb.hub_plate[m]).dot(&dir);
+        let lap = (fa.placed.hub_plate[k] - fb.placed.hub_plate[m]).dot(&dir);
         laps.see(lap, at);
         claims.see((lap - link.hub_overlap).abs(), at);
         for (f, g) in [(fa, fb), (fb, fa)] {
@@ -247,7 +243,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
                 legs_through.see(into_steel(&section, &g.placed.layout.hub, &g.slots), at);
             }
         }
-        if let Some((low, high)) = lap_heights(&fa.hub_plate, &fb.hub_plate) {
+        if let Some((low, high)) = lap_heights(&fa.placed.hub_plate, &fb.placed.hub_plate) {
             // how far the two slabs are from lying one on the other (0 when one does), and
             // the widest gap between them over the lap
             let into = (thickness - low).min(high + thickness).max(0.0);
@@ -328,11 +324,14 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             round.entry(v).or_default().push(u);
         }
     }
-    for (&u, f) in &folded {
-        let Some(face) = frame.mesh.faces.get(u) else {
+    // in unit order, so that of equal depths the same leg is named on every run
+    let mut units: Vec<usize> = folded.keys().copied().collect();
+    units.sort_unstable();
+    for u in units {
+        let (f, Some(face)) = (&folded[&u], frame.mesh.faces.get(u)) else {
             continue;
         };
-        let mut near: Vec<usize> = face.iter().flat_map(|v| round[v].clone()).collect();
+        let mut near: Vec<usize> = face.iter().flat_map(|v| round[v].iter().copied()).collect();
         near.sort_unstable();
         near.dedup();
         for (k, leg) in f.legs.iter().enumerate() {
@@ -456,11 +455,8 @@ fn fold_unit(
         ((hub_world[k] - rim_world[k]).norm() - (hub_pins[k] - rim_pins[k]).norm()).abs()
     });
     let tile = flat.map(|p| primary * lift(&p));
-    let hub_plate = placed.hub_plate;
     Ok((
         Folded {
-            primary,
-            hub_plate,
             tile,
             plate: plate_as_cut(&tile, bridged_insets(strip, u, widths.plate_inset())),
             legs: std::array::from_fn(|k| {
@@ -497,15 +493,15 @@ fn bridge(
     let mut ends = [[Point3::origin(); 2]; 2];
     for (i, s) in [-0.5, 0.5].into_iter().enumerate() {
         let edge = c + along * (s * width);
-        let on_a = a.primary * lift(&(edge + inward * (length / 2.0)));
-        let on_b = b.primary * lift(&(edge - inward * (length / 2.0)));
+        let on_a = a.placed.primary * lift(&(edge + inward * (length / 2.0)));
+        let on_b = b.placed.primary * lift(&(edge - inward * (length / 2.0)));
         worst = worst.max(((on_a - on_b).norm() - length).abs());
         ends[i] = [on_a, on_b];
     }
     // the bridge's two ends seen along the joint: their directions on a and on b
     let da = ends[1][0] - ends[0][0];
     let db = ends[1][1] - ends[0][1];
-    let na = a.primary * Vector3::z();
+    let na = a.placed.primary * Vector3::z();
     // the in-plane part of the turn from a's end to b's end: in a's plate
     let db_in = db - na * db.dot(&na);
     let bend = if db_in.norm() < 1e-12 {

@@ -163,15 +163,10 @@ pub(crate) fn posed_leg(
     pins: [Point2; 2],
     roll: Real,
 ) -> Option<[Point3; 4]> {
-    let flat_dir = |n: &[Point2; 2]| {
-        let d = (n[1] - n[0]).normalize();
-        Vector3::new(d.x, d.y, 0.0)
-    };
     // turned about its pin line so that its two necks' fold lines, as the leg carries them,
     // lie as near as they can to the same lines as the hub and the rim carry them (the hub
     // neck's fold line runs along the leg in the flat, so it alone cannot set the roll)
-    let fh = flat_dir(&p.layout.hub_necks[k]);
-    let fr = flat_dir(&p.layout.rim_necks[k]);
+    let [fh, fr] = p.layout.fold_lines(k);
     let (hw, rw) = (p.hub * lift(&pins[0]), p.primary * lift(&pins[1]));
     let (pose, _) = leg_pose(
         pins[0],

@@ -7,10 +7,8 @@ use serde::{Deserialize, Serialize};
 use sv_geom::{Contour, Point2, Vector2};
 use sv_unit::UnitLayout;
 
-use crate::Relief;
-
 use crate::plane::cross;
-use crate::{FaceMark, FlatStrip, HubFace, ProfileParams, StripsError};
+use crate::{FaceMark, FlatStrip, HubFace, ProfileParams, Relief, StripsError};
 
 /// A text to etch: centred at `at`, baseline along `angle` (rad), cap height `height` (mm).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -639,11 +637,6 @@ mod tests {
         let why = face_mark(&narrow, &label, HubFace::Etched, 3.75).unwrap_err();
         assert!(why.contains("15.0 mm from the label"), "{why}");
     }
-}
-
-#[cfg(test)]
-mod relief_tests {
-    use super::*;
 
     /// A relief 10 mm wide from 20 mm inside the hub down into a straight slot along x
     /// (4 mm wide): one cut of the slot's area plus the relief's band to the slot's centre

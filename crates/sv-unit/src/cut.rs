@@ -13,7 +13,7 @@
 //! its slots along [`UnitLayout::slot_paths`], the frame solve pins its legs at
 //! [`UnitLayout::pins`].
 
-use sv_geom::{Point2, Real, Vector2};
+use sv_geom::{Point2, Real, Vector2, Vector3};
 
 /// The widths that place the cut inside a unit plate (mm).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -208,6 +208,15 @@ impl UnitLayout {
             slot_paths,
             hub_necks,
             rim_necks,
+        })
+    }
+
+    /// The fold lines of leg `j`'s hub neck and rim neck: unit directions in the sheet's
+    /// plane (z = 0), as a leg's pose turns to them (`sv_frame::plates::leg_pose`).
+    pub fn fold_lines(&self, j: usize) -> [Vector3; 2] {
+        [&self.hub_necks[j], &self.rim_necks[j]].map(|n| {
+            let d = (n[1] - n[0]).normalize();
+            Vector3::new(d.x, d.y, 0.0)
         })
     }
 

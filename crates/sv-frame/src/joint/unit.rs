@@ -120,14 +120,10 @@ fn leg_end(layout: &UnitLayout, w: &CutWidths, j: usize) -> Option<LegEnd> {
         end + (start - end) * (LEG_END / length).min(1.0)
     };
     let lift = |p: Point2| Point3::new(p.x, p.y, 0.0);
-    let fold = |n: &[Point2; 2]| {
-        let d = (n[1] - n[0]).normalize();
-        Vector3::new(d.x, d.y, 0.0)
-    };
     let pins = layout.pins();
     Some(LegEnd {
         pins: [pins.hub[j], pins.rim[j]],
-        folds: [fold(&layout.hub_necks[j]), fold(&layout.rim_necks[j])],
+        folds: layout.fold_lines(j),
         quad: [
             lift(back(outer_end, outer_start)),
             lift(outer_end),
