@@ -99,6 +99,7 @@ fn the_default_build_folds_from_its_dxf_as_our_own_code_measures_it() {
         "units that cannot be rebuilt from their cut",
         "hub plates at a lap into each other",
         "leg through the neighbour's hub plate, outside its relief",
+        "leg through a neighbour's rim",
     ] {
         let line = checked
             .stdout
@@ -178,6 +179,10 @@ fn joints_hold(what: &str, fig: &Value) {
     // and the leg that runs down through the lower plate at a lap passes through the relief
     // cut for it: the leg as a plate, its section through the plate, clear of its steel
     assert!(f(fig, "leg_through_hub_plate_max") <= 0.1, "{what}: {fig}");
+    // nor does a leg leaving its plate at the rim neck run through a neighbour's rim there
+    // (that neighbour's plate lying under the corner, docs/geometry.md 5.5)
+    assert!(f(fig, "leg_into_rim_max") <= 0.1, "{what}: {fig}");
+    assert_eq!(fig["legs_into_rims"], 0, "{what}: {fig}");
 }
 
 /// Every bridge in the strips, found by our code in the DXF outlines, spans its joint,
@@ -238,14 +243,16 @@ fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
         if saddle {
             // the bridges the solve could not make are where the strips are split, named
             // in the summary: every bridge left in the strips folds within its limits, and
-            // the hub plates lie one on the other
+            // the hub plates lie one on the other, within a fifth of a millimetre (one lap
+            // 0.124 mm into its neighbour since the plates are kept from lying over each
+            // other at their joints, docs/geometry.md 6.9)
             assert!(
                 row(&built, "bridges (in strips)").contains("the strips are split there"),
                 "{}",
                 built.stdout
             );
             bridges_hold(target, &fig);
-            assert!(f(&fig, "hub_stack_lift_max") <= 0.1, "{target}: {fig}");
+            assert!(f(&fig, "hub_stack_lift_max") <= 0.2, "{target}: {fig}");
             // open joints are named, by the build's check as by ours
             checked.expect_code(1);
             assert_eq!(code, 1, "{target}: {stdout}");

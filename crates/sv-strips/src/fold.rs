@@ -312,10 +312,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     // a leg ends at its tile's corner, where the neighbouring tiles' corners are: the leg as
     // a plate against the rims of the units round that corner (inside a rim a primary
     // plate is open: its slots, and the hub and legs that left it)
-    let mut legs_rims = Worst::max(
-        "leg through a neighbour's rim (mm; not held)",
-        Real::INFINITY,
-    );
+    let mut legs_rims = Worst::max("leg through a neighbour's rim (mm)", limits.collision);
     // how many legs run more than a collision's limit into a rim
     let mut into_rims = 0;
     let mut round: HashMap<usize, Vec<usize>> = HashMap::new();
