@@ -360,7 +360,6 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         let joint_options = sv_frame::JointOptions {
             max_iterations: cfg.joints.max_iterations,
             split_iterations: cfg.joints.split_iterations,
-            leg_ends: cfg.joints.leg_ends,
             min_overlap,
             overlap,
             limits: p.joint_limits(),

@@ -325,10 +325,6 @@ pub struct JointsConfig {
     /// joints hold better (`[strips] direction` is tried first); `--strip-direction` on the
     /// command line tries only the direction it names.
     pub both_directions: bool,
-    /// Keep each leg's end at its rim neck and the neighbouring primary plates out of each
-    /// other, with this weight (a factor on the plates' collision rows); 0 leaves those
-    /// rows out (docs/geometry.md 6.5).
-    pub leg_ends: f64,
 }
 
 impl Default for JointsConfig {
@@ -338,7 +334,6 @@ impl Default for JointsConfig {
             max_iterations: sv_frame::JointOptions::default().max_iterations,
             split_iterations: sv_frame::JointOptions::default().split_iterations,
             both_directions: true,
-            leg_ends: sv_frame::JointOptions::default().leg_ends,
         }
     }
 }

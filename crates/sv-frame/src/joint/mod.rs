@@ -11,8 +11,6 @@
 //!   plane, twist kept within its limit), so the joint is a fold about that line;
 //! - **welds** (primary plates of neighbouring strips): the facing sides meet at a point,
 //!   and neither plate passes through the other;
-//! - with [`JointOptions::leg_ends`], the last 12 mm of each leg at its rim neck and the
-//!   other primary plate of each link at its corners: neither reaches into the other;
 //! - **hub laps** of at least the weld minimum;
 //! - the hub mesh: faces planar, vertices on the target's tangent plane (and boundary line)
 //!   where they started, a light pull back along the surface.
@@ -34,7 +32,7 @@ use crate::{
 };
 use piece::{Join, Piece};
 pub(crate) use problem::joint_record;
-use problem::{edge_ratio, side_links, stacking, Problem, LEG_ENDS_STIFFNESS, UNIT_COLUMNS};
+use problem::{edge_ratio, side_links, stacking, Problem, UNIT_COLUMNS};
 use unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints};
 
 /// The target surface the hub mesh stays on.
@@ -85,12 +83,6 @@ pub struct JointOptions {
     /// The strip pieces as the strips stage plans them: none grows longer than its sheet
     /// lets it.
     pub pieces: Vec<PieceLength>,
-    /// The weight of the rows that keep each leg's end at its rim neck (its last 12 mm) and
-    /// the primary plates of its unit's links out of each other, as a factor on the plates'
-    /// own collision rows (in the last stage of their stiffness); 0 (the default) leaves
-    /// them out, and the solve as it was without them, bit for bit. A study option: at 0.1
-    /// they clear some of those legs and leave joints open elsewhere (docs/geometry.md 5.5).
-    pub leg_ends: Real,
 }
 
 /// A strip piece as the strips stage plans it before the joints close.
@@ -119,7 +111,6 @@ impl Default for JointOptions {
             bridge_room: 15.0,
             thickness: 2.5,
             pieces: Vec::new(),
-            leg_ends: 0.0,
         }
     }
 }
@@ -402,8 +393,6 @@ pub fn close_joints(
             expansion: solved.options.expansion,
             cut: solved.options.cut,
             scale,
-            // posed from the stage where their rows weigh on
-            leg_ends: false,
         },
         options,
         nv,
@@ -494,7 +483,6 @@ pub fn close_joints(
             closing * 2 / 5
         } else {
             problem.stiffness = stiffness;
-            problem.model.leg_ends = options.leg_ends > 0.0 && stiffness >= LEG_ENDS_STIFFNESS;
             closing.saturating_sub(iterations) / (STIFFNESS.len() - stage)
         };
         units = descend(
@@ -680,7 +668,6 @@ mod tests {
         let (mesh, solved, anchors, bridges) = cap();
         let options = JointOptions {
             min_overlap: 200.0, // every lap short: the lap rows act
-            leg_ends: 1.0,
             ..Default::default()
         };
         let scale = 300.0;
@@ -704,7 +691,6 @@ mod tests {
                 expansion: 1.0,
                 cut: solved.options.cut,
                 scale,
-                leg_ends: true,
             },
             options: &options,
             nv,

@@ -7,11 +7,10 @@ use sv_geom::sparse::NormalEquations;
 use sv_geom::{segment_closest, Point3, Real, Vector3};
 
 use super::piece::Piece;
-use super::unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints, INPUTS, LEG_ENDS};
+use super::unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints, INPUTS};
 use super::{Anchor, JointFigures, JointOptions};
 use crate::plates::{
-    edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut, plate_normal,
-    reach_profile, REACH_ROWS,
+    edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut, reach_profile, REACH_ROWS,
 };
 use crate::solve::hub_overlap;
 use crate::GOAL_PLANARITY;
@@ -36,10 +35,6 @@ pub(super) const W_COLLIDE: Real = 100.0;
 /// builds that close (with 3.2 a pavilion weld stayed 5.5 mm open, with 20 a vault weld
 /// 2.1 mm).
 pub(super) const OVERLAP_SLAB: Real = 10.0;
-/// The rows of the legs' ends at the rim ([`JointOptions::leg_ends`]) weigh from this
-/// stiffness of the collision rows on: the last stage, once the joints have closed (from
-/// the first stage on, they left welds open on the vault).
-pub(super) const LEG_ENDS_STIFFNESS: Real = 0.3;
 pub(super) const W_SCALE: Real = 0.3;
 pub(super) const W_LIFT: Real = 0.03;
 pub(super) const W_STACK: Real = 10.0;
@@ -165,62 +160,6 @@ const HUB_PLATES: [UnitPoint; 8] = [
     (1, 6),
     (1, 7),
 ];
-
-/// The segments of a leg's end at the rim ([`LEG_ENDS`]) kept out of the neighbouring
-/// primary plates: its outer edge, its inner edge and its end across the leg.
-const LEG_END_SEGMENTS: [[usize; 2]; 3] = [[0, 1], [3, 2], [1, 2]];
-
-/// Rows of [`leg_end_reach`]: each segment of the leg's end into the plate, each side of the
-/// plate into the leg's end.
-const LEG_END_ROWS: usize = (LEG_END_SEGMENTS.len() + 4) * REACH_ROWS;
-
-/// How far a leg's end at the rim and a neighbouring primary plate reach into each other
-/// ([`reach_profile`], thickness `thickness`): `p` holds the plate's tile (its corners; cut
-/// back by `inset` as [`plate_as_cut`]) and the leg's end (a plate on its own, its corners
-/// as at [`LEG_ENDS`]). The leg's edges and end into the plate, and the plate's sides into
-/// the leg's end: where the plate's corner lies under the leg, no edge of the leg meets it.
-fn leg_end_reach(p: &[Point3; 8], inset: [Real; 4], thickness: Real) -> [Real; LEG_END_ROWS] {
-    let plate = plate_as_cut(&[p[0], p[1], p[2], p[3]], inset);
-    let leg = [p[4], p[5], p[6], p[7]];
-    let mut rows = [0.0; LEG_END_ROWS];
-    // the leg's end all more than a thickness off the plate's mid-plane on one side, or
-    // beyond one of its sides (and a millimetre more, for a plate as cut not quite flat):
-    // nothing reaches, and nothing needs measuring
-    if let Some(n) = plate_normal(&plate) {
-        let far = thickness + 1.0;
-        let heights = leg.map(|q| n.dot(&(q - plate[0])));
-        let off_plane = heights.iter().all(|&h| h > far) || heights.iter().all(|&h| h < -far);
-        let beside = (0..4).any(|i| {
-            let inward = n.cross(&(plate[(i + 1) % 4] - plate[i])).normalize();
-            leg.iter().all(|q| inward.dot(&(q - plate[i])) < -far)
-        });
-        if off_plane || beside {
-            return rows;
-        }
-    }
-    for (g, chunk) in rows.chunks_exact_mut(REACH_ROWS).enumerate() {
-        chunk.copy_from_slice(&leg_end_group(&plate, &leg, g, thickness));
-    }
-    rows
-}
-
-/// Group `g` of [`leg_end_reach`]'s rows: the leg's segment `g` into the plate, or (from
-/// `LEG_END_SEGMENTS.len()` on) the plate's side `g - LEG_END_SEGMENTS.len()` into the
-/// leg's end.
-fn leg_end_group(
-    plate: &[Point3; 4],
-    leg: &[Point3; 4],
-    g: usize,
-    thickness: Real,
-) -> [Real; REACH_ROWS] {
-    match LEG_END_SEGMENTS.get(g) {
-        Some([a, b]) => reach_profile(plate, &leg[*a], &leg[*b], thickness),
-        None => {
-            let i = g - LEG_END_SEGMENTS.len();
-            reach_profile(leg, &plate[i], &plate[(i + 1) % 4], thickness)
-        }
-    }
-}
 
 /// One residual of a link: its value, weight, gradient along the units' points and along
 /// the joint's parameter.
@@ -792,66 +731,6 @@ impl Problem<'_> {
                 ds: (up[i] - down[i]) / (2.0 * hs),
             });
         }
-        // the legs' ends at the rim necks at both ends of each unit's side of the joint and
-        // the other unit's primary plate as cut: neither reaches into the other, as the
-        // plates' sides do not (only the rows that weigh: the block's columns are the same
-        // with or without them)
-        if o.leg_ends > 0.0 && self.model.leg_ends && self.stiffness >= LEG_ENDS_STIFFNESS {
-            for (side, corner) in [(0, k), (1, m)] {
-                let other = 1 - side;
-                let plate = units[other].primary();
-                let inset = insets[other];
-                // leg j ends at corner j + 1
-                for j in [(corner + 3) % 4, corner] {
-                    let leg: [usize; 4] = std::array::from_fn(|i| LEG_ENDS + 4 * j + i);
-                    let pts = [
-                        plate[0],
-                        plate[1],
-                        plate[2],
-                        plate[3],
-                        units[side].points[leg[0]],
-                        units[side].points[leg[1]],
-                        units[side].points[leg[2]],
-                        units[side].points[leg[3]],
-                    ];
-                    let now = leg_end_reach(&pts, inset, th);
-                    let at = [
-                        (other, 0),
-                        (other, 1),
-                        (other, 2),
-                        (other, 3),
-                        (side, leg[0]),
-                        (side, leg[1]),
-                        (side, leg[2]),
-                        (side, leg[3]),
-                    ];
-                    // each segment or side that reaches: its rows, with their gradients
-                    for (g, now) in now.chunks_exact(REACH_ROWS).enumerate() {
-                        if now.iter().all(|&r| r == 0.0) {
-                            continue;
-                        }
-                        let grads = if grad {
-                            fd_jac(&pts, h, |p| {
-                                let plate = plate_as_cut(&[p[0], p[1], p[2], p[3]], inset);
-                                leg_end_group(&plate, &[p[4], p[5], p[6], p[7]], g, th)
-                            })
-                        } else {
-                            [[Vector3::zeros(); 8]; REACH_ROWS]
-                        };
-                        for (r, grads) in now.iter().zip(grads).filter(|(r, _)| **r > 0.0) {
-                            out.push(LinkRow {
-                                kind: 6,
-                                r: *r,
-                                w: W_COLLIDE * self.stiffness * o.leg_ends,
-                                at,
-                                grads,
-                                ds: 0.0,
-                            });
-                        }
-                    }
-                }
-            }
-        }
         out
     }
 
@@ -1019,40 +898,4 @@ pub(super) fn tangents(n: &Vector3) -> (Vector3, Vector3) {
     };
     let u1 = n.cross(&helper).normalize();
     (u1, n.cross(&u1))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A 100 x 100 plate at z = 0 and a leg's end 12 mm long and 15 mm wide standing across
-    /// the plate's corner (100, 100), in the vertical plane `x + y = c`.
-    fn leg_across_the_corner(c: Real) -> [Point3; 8] {
-        let along = Vector3::new(1.0, -1.0, 0.0).normalize();
-        let centre = Point3::new(c / 2.0, c / 2.0, 0.0);
-        let at = |u: Real, z: Real| centre + along * u + Vector3::new(0.0, 0.0, z);
-        [
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(100.0, 0.0, 0.0),
-            Point3::new(100.0, 100.0, 0.0),
-            Point3::new(0.0, 100.0, 0.0),
-            at(-7.5, 6.0),
-            at(-7.5, -6.0),
-            at(7.5, -6.0),
-            at(7.5, 6.0),
-        ]
-    }
-
-    #[test]
-    fn a_plate_corner_under_a_leg_end_reaches_into_it_where_no_edge_of_the_leg_meets_it() {
-        let rows = leg_end_reach(&leg_across_the_corner(195.0), [0.0; 4], 2.5);
-        let (legs_edges, plates_sides) = rows.split_at(LEG_END_SEGMENTS.len() * REACH_ROWS);
-        assert!(legs_edges.iter().all(|&r| r == 0.0), "{legs_edges:?}");
-        let deepest = plates_sides.iter().copied().fold(0.0, Real::max);
-        // through the leg's mid-plane, a thickness and more inside its outline
-        assert!(deepest >= 2.5, "{deepest}");
-        // the leg moved off the corner: clear
-        let clear = leg_end_reach(&leg_across_the_corner(205.0), [0.0; 4], 2.5);
-        assert!(clear.iter().all(|&r| r == 0.0));
-    }
 }

@@ -10,9 +10,8 @@
 //! branches meet, and a projection onto them can jump from one to the other.)
 
 use sv_geom::{Matrix3, Point2, Point3, Real, Rotation3, Vector3};
-use sv_unit::{leg_outline, CutWidths, Linkage, Rhombus, UnitLayout};
+use sv_unit::{CutWidths, Linkage, Rhombus, UnitLayout};
 
-use crate::plates::leg_pose;
 use crate::Hub;
 
 /// Inputs of one unit: the 12 coordinates of its face's vertices (vertex-major), then the
@@ -34,21 +33,8 @@ pub(crate) struct Shape {
     pub lift: Real,
 }
 
-/// Points of one unit: the primary plate's corners (the tile), then the hub plate's, then
-/// the four legs' ends at the rim (from [`LEG_ENDS`]).
-pub(crate) const POINTS: usize = LEG_ENDS + 4 * 4;
-
-/// The first point of the legs' ends at the rim: leg `j`'s are `LEG_ENDS + 4 j ..`, the
-/// corners of the last [`LEG_END`] of its body ([`sv_unit::leg_outline`]) on its mid-plane,
-/// posed as the fold check poses the leg ([`leg_pose`]): its outer edge [`LEG_END`] from
-/// the end, its outer and inner ends at the rim neck, its inner edge [`LEG_END`] from the
-/// end. Without a cut (zero widths) or without [`Model::leg_ends`], all four are the leg's
-/// rim pin.
-pub(crate) const LEG_ENDS: usize = 8;
-
-/// How much of each leg, from its end at the rim neck toward the hub, the joint solve keeps
-/// out of the neighbouring primary plates (mm).
-pub(crate) const LEG_END: Real = 12.0;
+/// Points of one unit: the primary plate's corners (the tile), then the hub plate's.
+pub(crate) const POINTS: usize = 8;
 
 /// How a unit is built from its inputs.
 #[derive(Clone, Copy, Debug)]
@@ -58,8 +44,6 @@ pub(crate) struct Model {
     pub cut: Option<CutWidths>,
     /// Length of the arc per radian of the rotation inputs.
     pub scale: Real,
-    /// Pose the legs' ends at the rim ([`LEG_ENDS`]); else they are the rim pins.
-    pub leg_ends: bool,
 }
 
 /// The primary plate's pose: tile-frame point `r` at `q r + t` in the world.
@@ -101,38 +85,6 @@ impl UnitPoints {
     }
 }
 
-/// The end of a leg at the rim, in the flat (the tile's frame): what poses it.
-#[derive(Clone, Copy, Debug)]
-struct LegEnd {
-    /// Its pins, on the hub and on the rim.
-    pins: [Point2; 2],
-    /// The fold lines of its hub neck and its rim neck.
-    folds: [Vector3; 2],
-    /// The last [`LEG_END`] of its body, as at [`LEG_ENDS`].
-    quad: [Point3; 4],
-}
-
-/// Leg `j`'s end at the rim in `layout`; `None` when its body has no length.
-fn leg_end(layout: &UnitLayout, w: &CutWidths, j: usize) -> Option<LegEnd> {
-    let [outer_start, outer_end, inner_end, inner_start] = leg_outline(layout, w, j)?;
-    let back = |end: Point2, start: Point2| {
-        let length = (start - end).norm();
-        end + (start - end) * (LEG_END / length).min(1.0)
-    };
-    let lift = |p: Point2| Point3::new(p.x, p.y, 0.0);
-    let pins = layout.pins();
-    Some(LegEnd {
-        pins: [pins.hub[j], pins.rim[j]],
-        folds: layout.fold_lines(j),
-        quad: [
-            lift(back(outer_end, outer_start)),
-            lift(outer_end),
-            lift(inner_end),
-            lift(back(inner_end, inner_start)),
-        ],
-    })
-}
-
 /// A unit's failure: the input is off the unit's domain.
 #[derive(Clone, Debug)]
 pub(crate) enum UnitFailure {
@@ -140,17 +92,14 @@ pub(crate) enum UnitFailure {
     Cut(String),
 }
 
-/// The cut of a hub's tile scaled by `e`: its legs, hub plate (hub frame) and with
-/// `leg_ends` its legs' ends at the rim (none without a cut, or where a leg's body has no
-/// length).
-#[allow(clippy::type_complexity)]
+/// The cut of a hub's tile scaled by `e`: its legs and hub plate (hub frame), and the
+/// tile's rhombus.
 fn cut_of(
     hub: &Hub,
     cut: Option<&CutWidths>,
     e: Real,
     scale: [Real; 2],
-    leg_ends: bool,
-) -> Result<(Linkage, [Point3; 4], Rhombus, [Option<LegEnd>; 4]), UnitFailure> {
+) -> Result<(Linkage, [Point3; 4], Rhombus), UnitFailure> {
     let rhombus = hub
         .rhombus
         .scaled(scale)
@@ -163,7 +112,6 @@ fn cut_of(
                 Linkage::new(&layout.pins()),
                 layout.hub.map(|p| Point3::new(p.x, p.y, 0.0)),
                 rhombus,
-                std::array::from_fn(|j| leg_ends.then(|| leg_end(&layout, w, j)).flatten()),
             ))
         }
         None => {
@@ -173,7 +121,6 @@ fn cut_of(
                 Linkage::zero_width(&scaled),
                 scaled.corners().map(Point3::from),
                 rhombus,
-                [None; 4],
             ))
         }
     }
@@ -187,26 +134,19 @@ struct Made {
     legs: Linkage,
     hub_plate: [Point3; 4],
     rhombus: Rhombus,
-    leg_ends: [Option<LegEnd>; 4],
 }
 
 impl Model {
     /// The unit on `quad` with `shape`'s spin and scales (a hub fit and a cut).
     fn make(&self, quad: &[Point3; 4], shape: Shape) -> Result<Made, UnitFailure> {
         let hub = Hub::fit(quad, shape.spin).ok_or(UnitFailure::NoHub)?;
-        let (legs, hub_plate, rhombus, leg_ends) = cut_of(
-            &hub,
-            self.cut.as_ref(),
-            self.expansion,
-            shape.scale,
-            self.leg_ends,
-        )?;
+        let (legs, hub_plate, rhombus) =
+            cut_of(&hub, self.cut.as_ref(), self.expansion, shape.scale)?;
         Ok(Made {
             hub,
             legs,
             hub_plate,
             rhombus,
-            leg_ends,
         })
     }
 
@@ -226,16 +166,6 @@ impl Model {
             let h = hub.to_world(&Point3::from(made.legs.hub[j]));
             let r = Point3::from(pose.q * made.legs.rim[j] + pose.t);
             errors[j] = (h - r).norm() - made.legs.length[j];
-            let end = made.leg_ends[j].and_then(|end| {
-                let folds = end.folds;
-                let carried = [
-                    (folds[0], hub.frame * folds[0]),
-                    (folds[1], pose.q * folds[1]),
-                ];
-                let (motion, _) = leg_pose(end.pins[0], end.pins[1], h, r, &carried)?;
-                Some(end.quad.map(|p| motion * p))
-            });
-            points[LEG_ENDS + 4 * j..LEG_ENDS + 4 * j + 4].copy_from_slice(&end.unwrap_or([r; 4]));
         }
         (points, errors)
     }
@@ -332,7 +262,6 @@ mod tests {
             expansion: 1.0,
             cut: Some(CutWidths::STEEL_3MM),
             scale: 300.0,
-            leg_ends: true,
         };
         let quad = [
             Point3::new(0.0, 0.0, 0.0),
@@ -341,8 +270,7 @@ mod tests {
             Point3::new(-8.0, 296.0, 4.0),
         ];
         let hub = Hub::fit(&quad, model.spin).unwrap();
-        let (legs, _, rhombus, _) =
-            cut_of(&hub, model.cut.as_ref(), 1.0, [1.0, 1.0], false).unwrap();
+        let (legs, _, rhombus) = cut_of(&hub, model.cut.as_ref(), 1.0, [1.0, 1.0]).unwrap();
         let (r, p) = legs.pose(&rhombus, &Deployment::new(0.8, 0.1)).unwrap();
         // hub-frame pose (hub x at R x + P in the tile frame) to the plate's world pose
         let q = hub.frame * r.transpose();
@@ -385,30 +313,6 @@ mod tests {
         for j in 0..4 {
             let rate = (lifted.legs[j] - u.legs[j]) / 2.0;
             assert!((rate - dl[j][21]).abs() < 0.05, "{rate} vs {}", dl[j][21]);
-        }
-        // each leg's end at the rim: the last LEG_END of its body, as wide as the leg, at its
-        // rim pin, running toward its hub pin
-        let w = CutWidths::STEEL_3MM;
-        for j in 0..4 {
-            let e: [Point3; 4] = std::array::from_fn(|i| u.points[LEG_ENDS + 4 * j + i]);
-            for (a, b, length) in [(0, 1, LEG_END), (3, 2, LEG_END), (1, 2, w.leg)] {
-                assert!(((e[b] - e[a]).norm() - length).abs() < 1e-9, "leg {j}");
-            }
-            let mid = |a: usize, b: usize| Point3::from((e[a].coords + e[b].coords) / 2.0);
-            let rim = Point3::from(pose.q * legs.rim[j] + pose.t);
-            let hub_pin = hub.to_world(&Point3::from(legs.hub[j]));
-            assert!((mid(1, 2) - rim).norm() < w.leg, "leg {j}");
-            let toward = (mid(0, 3) - mid(1, 2)).normalize();
-            assert!(toward.dot(&(hub_pin - rim).normalize()) > 0.99, "leg {j}");
-        }
-        // their derivatives: a vertex of the face moved 0.01 mm
-        let mut moved = quad;
-        moved[1].y += 0.01;
-        let after = model.points(&moved, &pose, shape, false).unwrap();
-        let d = u.d.as_ref().unwrap();
-        for p in LEG_ENDS..POINTS {
-            let rate = (after.points[p] - u.points[p]) / 0.01;
-            assert!((rate - d[p][4]).norm() < 1e-3, "{rate} vs {}", d[p][4]);
         }
     }
 }
