@@ -365,3 +365,61 @@ fn a_pose_moved_2_mm_or_a_neck_moved_2_mm_fails_both_checks_naming_the_unit() {
         "{strip}: {necks}"
     );
 }
+
+/// At 200 mm units the default 2.5 mm sheet's hub laps cannot be welded (about 3 mm on a
+/// flat grid), so without a `[profile]` the build cuts the thickest sheet whose laps can
+/// (1.5 mm at its least widths, docs/config.md) and its summary says so; our own fold check
+/// finds every lap in the DXFs at least 25 mm. A config that names a profile is cut as it
+/// stands, and its short laps are an error naming the levers, nothing written. (40 joint
+/// iterations in one strip direction, and none for the named profile: this is about the
+/// sheet and the laps, and the full solve takes a minute.)
+#[test]
+fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
+    let dir = Dir::new();
+    let quick = "[joints]\nmax_iterations = 40\nboth_directions = false\n";
+    fs::write(dir.join("quick.toml"), quick).unwrap();
+    let args = ["--target", "builtin:flat", "--unit-size", "200"];
+    let built = dir.run(&[&["build", "--config", "quick.toml"][..], &args].concat());
+    built.expect_code(0);
+    let sheet = row(&built, "sheet");
+    assert!(sheet.contains("1.500 mm at its least widths"), "{sheet}");
+    assert!(
+        sheet.contains("short of the weld minimum 25.000 mm"),
+        "{sheet}"
+    );
+    let frame = read_json(&dir.join("out/frame.json"));
+    assert_eq!(frame["params"]["thickness"], 1.5, "{}", frame["params"]);
+    // the least widths of 1.5 mm sheet: legs 6 t, necks 3 t, rim and slots 3 mm
+    let cut = &frame["params"]["cut"];
+    assert_eq!(
+        (f(cut, "leg"), f(cut, "neck"), f(cut, "rim")),
+        (9.0, 4.5, 3.0),
+        "{cut}"
+    );
+    let units = frame["units"].as_array().unwrap().len();
+    let (_, stdout, fig) = fold_check(&dir);
+    assert_eq!(fig["legs_checked"], 4 * units, "{stdout}");
+    assert!(f(&fig, "leg_error_max") <= 0.5, "{fig}");
+    assert!(f(&fig, "lap_min") >= 25.0, "{fig}");
+
+    fs::write(
+        dir.join("given.toml"),
+        "[joints]\nclose = false\n[profile]\nthickness = 2.5\n",
+    )
+    .unwrap();
+    let given = dir.run(
+        &[
+            &["build", "--config", "given.toml", "--out", "given"][..],
+            &args,
+        ]
+        .concat(),
+    );
+    given.expect_code(2);
+    assert!(
+        given.stderr.contains("hub laps too short to weld")
+            && given.stderr.contains("profile.thickness = 1.500"),
+        "{}",
+        given.stderr
+    );
+    assert!(!dir.join("given/frame.json").exists());
+}

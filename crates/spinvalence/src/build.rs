@@ -60,14 +60,18 @@ pub struct StageOptions {
     pub strips: sv_strips::StripOptions,
     /// Nesting onto sheets.
     pub nest: sv_nest::NestOptions,
+    /// The sheet the parts are cut from, and why that one (the summary's "sheet" row).
+    pub sheet: String,
 }
 
 /// The config after the command line has overridden the file, and the stage options it
 /// gives, every value checked before any work starts.
 pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
+    let mut profile_given = false;
     let mut cfg = match &args.config {
         Some(path) => {
             let text = output::read_text(path)?;
+            profile_given = config::sets_profile(&text);
             config::parse(&text, &path.display().to_string())?
         }
         None => BuildConfig::default(),
@@ -104,6 +108,8 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
         bail!("invalid unit size {size}: must be a positive length in mm");
     }
     cfg.secondary.check().map_err(|e| anyhow!("{e}"))?;
+    cfg.primary.min_overlap(&cfg.profile)?;
+    let sheet = sheet_for_unit_size(&mut cfg, profile_given);
     if !cfg.joints.close && cfg.frame != crate::config::FrameConfig::default() {
         bail!("frame: parameter overlap needs the joint solve ([joints] close = true)");
     }
@@ -124,6 +130,7 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
             solve,
             strips,
             nest,
+            sheet,
         },
     ))
 }
@@ -152,6 +159,48 @@ pub fn load_target(spec: &str, unit: f64, quiet: bool) -> Result<TargetMesh> {
     };
     check_units(spec, &mesh, unit)?;
     Ok(mesh)
+}
+
+/// The sheet the build cuts, and why: the config's `[profile]` where it has one; else the
+/// default, or, where the default's hub laps cannot reach the weld minimum at this unit
+/// size, the thickest sheet whose least profile can (`ProfileParams::for_unit_size`: the
+/// flat grid's estimate, docs/geometry.md 5.4).
+fn sheet_for_unit_size(cfg: &mut BuildConfig, given: bool) -> String {
+    let mm = |x: f64| format!("{} mm", number(x));
+    let p = &cfg.profile;
+    if given {
+        return format!("{} (the config's [profile])", mm(p.thickness));
+    }
+    let unit = cfg.secondary.unit_size;
+    // a weld minimum that cannot be read was refused before this
+    let minimum = |q: &sv_strips::ProfileParams| cfg.primary.min_overlap(q).unwrap_or(0.0);
+    match p.for_unit_size(unit, minimum) {
+        Some(q) if q == *p => format!("{} (the default)", mm(p.thickness)),
+        Some(q) => {
+            let why = format!(
+                "{} at its least widths (leg {}, neck {}, rim {}, slots {}), chosen for {} units: \
+                 the default {} sheet's hub laps would be about {} there, short of the weld \
+                 minimum {} ([profile] in a config file sets the sheet)",
+                mm(q.thickness),
+                number(q.leg_width),
+                number(q.neck_width),
+                number(q.rim_width),
+                number(q.slot_width),
+                mm(unit),
+                mm(p.thickness),
+                mm(p.flat_lap(unit)),
+                mm(minimum(p)),
+            );
+            cfg.profile = q;
+            why
+        }
+        None => format!(
+            "{} (the default; at {} units no sheet's hub laps reach the weld minimum, \
+             docs/geometry.md 5.4)",
+            mm(p.thickness),
+            mm(unit)
+        ),
+    }
 }
 
 /// A target too small for 2 x 2 units is most often drawn in metres or inches: say so
@@ -542,6 +591,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         let max = overlaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let unit = report.mean_edge;
         let mut rows = summary_rows(&cfg, &report, unit, &solved.report, (min, max), &timings);
+        rows.insert(3, vec!["sheet".into(), options.sheet.clone()]);
         if let Some(j) = &joints {
             let at = rows.len() - 2;
             let mut joint = joint_rows(j, cfg.strips.direction, &frame);

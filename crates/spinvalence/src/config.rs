@@ -437,6 +437,11 @@ pub fn parse(text: &str, name: &str) -> Result<BuildConfig> {
     Ok(config)
 }
 
+/// Whether a config file sets `[profile]` (without one the sheet follows the unit size).
+pub fn sets_profile(text: &str) -> bool {
+    toml::from_str::<toml::Table>(text).is_ok_and(|t| t.contains_key("profile"))
+}
+
 /// `[profile]` is `sv_strips::ProfileParams`, which `strips.json` flattens and so cannot
 /// deny unknown fields itself: compare its keys with the known ones here.
 fn check_profile_keys(text: &str, name: &str) -> Result<()> {

@@ -236,6 +236,29 @@ impl ProfileParams {
         self.cut_widths().hub_inset()
     }
 
+    /// The hub lap as cut on a flat grid of square units of side `unit` at spin 45 degrees
+    /// (docs/geometry.md 5.4): a hub corner passes the edge by `(sqrt 2 - 1) unit / 2`, and
+    /// the plate as cut loses `sqrt 2 hub_inset` of it on each side.
+    pub fn flat_lap(&self, unit: f64) -> f64 {
+        (2f64.sqrt() - 1.0) * unit - 2.0 * 2f64.sqrt() * self.hub_inset()
+    }
+
+    /// The sheet for units of side `unit` when the user names none: `self` where its
+    /// [`flat_lap`](Self::flat_lap) reaches `min_overlap` of it, else the least profile
+    /// ([`least_for`](Self::least_for)) of the thickest sheet, in 0.5 mm steps below
+    /// `self`'s, whose flat lap does; `None` where no sheet's does.
+    pub fn for_unit_size(&self, unit: f64, min_overlap: impl Fn(&Self) -> f64) -> Option<Self> {
+        let welds = |p: &Self| p.flat_lap(unit) >= min_overlap(p);
+        if welds(self) {
+            return Some(self.clone());
+        }
+        (1..)
+            .map(|k| self.thickness - 0.5 * k as f64)
+            .take_while(|&t| t > 0.0)
+            .filter_map(|t| self.least_for(t))
+            .find(welds)
+    }
+
     /// Check every parameter; the error names the first bad one.
     pub fn validate(&self) -> Result<(), StripsError> {
         let bad = |name: &'static str, value: f64, why: String| {
@@ -407,6 +430,23 @@ mod tests {
             thin.hub_inset()
         );
         assert!(d.least_for(1.0).is_none());
+    }
+
+    #[test]
+    fn the_sheet_follows_the_unit_size_where_the_default_cannot_weld() {
+        let d = ProfileParams::default();
+        let aws = |p: &ProfileParams| (5.0 * p.thickness).max(25.0);
+        // 300 mm: the default's laps, 0.41421 x 300 - 2.82843 x 28.125 = 44.7 mm
+        assert_eq!(d.for_unit_size(300.0, aws), Some(d.clone()));
+        // 200 mm: 2.5 mm gives 3.3 mm, 2 mm sheet at its least (hub 22.5 mm in) 19.2 mm,
+        // 1.5 mm (19.5 mm in) 27.7 mm
+        let thin = d.for_unit_size(200.0, aws).unwrap();
+        assert_eq!(thin, d.least_for(1.5).unwrap());
+        assert!((thin.flat_lap(200.0) - (82.8427 - 55.1543)).abs() < 1e-3);
+        // 180 mm: 1.5 mm gives 19.4 mm, and no thinner sheet has a profile
+        assert_eq!(d.for_unit_size(180.0, aws), None);
+        // a lower weld minimum keeps the default longer
+        assert_eq!(d.for_unit_size(200.0, |_| 0.0), Some(d));
     }
 
     #[test]
