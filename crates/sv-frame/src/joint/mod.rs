@@ -514,9 +514,14 @@ pub fn close_joints(
         }
         // the bridges the solve could not make (its iterations used up): the strips are
         // split there, and the welds that take their place get a round of their own, polished
-        // again (a few rounds, as a round may leave a bridge beside them outside its limits)
+        // again (a few rounds, as a round may leave a bridge beside them outside its limits).
         let failing = problem.failing_bridges(&x, &units);
-        if failing.is_empty() || options.split_iterations == 0 || rounds == SPLIT_ROUNDS {
+        if options.split_iterations == 0 || rounds == SPLIT_ROUNDS {
+            break;
+        }
+        // every bridge made and none split, but welds left open: a round for them,
+        // polished again (only then: a frame that closes is the same)
+        if failing.is_empty() && (!demoted.is_empty() || !problem.welds_open(&x, &units)) {
             break;
         }
         rounds += 1;

@@ -27,14 +27,14 @@ pub(super) const W_TURN: Real = 0.1;
 pub(super) const W_LEG: Real = 1000.0;
 pub(super) const W_COLLIDE: Real = 100.0;
 /// The collision rows measure a facing side's depth inside the other plate's outline, seen
-/// along its normal, at any height within this many thicknesses of its mid-plane: plates
-/// that lie one over the other near a joint (a weld holds them at its point only) put one
-/// plate's rim under the other's rim neck, where that unit's leg leaves its plate towards
-/// the hub side and runs through it (docs/geometry.md 5.5). Measured with one thickness,
-/// the pavilion had 27 legs through a neighbour's rim; with 10, none on the four 300 mm
-/// builds that close (with 3.2 a pavilion weld stayed 5.5 mm open, with 20 a vault weld
-/// 2.1 mm).
-pub(super) const OVERLAP_SLAB: Real = 10.0;
+/// along its normal, at any height within this many thicknesses of its mid-plane (1 m of
+/// 2.5 mm sheet: at any height a neighbour can be): plates that lie one over the other near
+/// a joint (a weld holds them at its point only) put one plate's rim under the other's rim
+/// neck, where that unit's leg leaves its plate towards the hub side and runs through it
+/// (docs/geometry.md 5.5). With one thickness the pavilion had 27 legs through a
+/// neighbour's rim; with this, none. A slab only a few thicknesses deep has an edge: the
+/// solve pushed plates apart in height past it, and opened welds.
+pub(super) const OVERLAP_SLAB: Real = 400.0;
 pub(super) const W_SCALE: Real = 0.3;
 pub(super) const W_LIFT: Real = 0.03;
 pub(super) const W_STACK: Real = 10.0;
@@ -745,6 +745,13 @@ impl Problem<'_> {
     }
 
     /// The links still bridges whose joints at `x` are outside a bridge's limits.
+    /// Whether a weld is outside its limits (its plates apart or into each other).
+    pub(super) fn welds_open(&self, x: &[Real], units: &[UnitPoints]) -> bool {
+        let limits = &self.options.limits;
+        let records = self.records(x, units);
+        (records.iter().enumerate()).any(|(li, j)| !self.bridges[li] && !limits.holds(j))
+    }
+
     pub(super) fn failing_bridges(
         &self,
         x: &[Real],
