@@ -241,15 +241,15 @@ fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
         let checked = dir.run(&["check", "out"]);
         agrees_with_check(&checked, &fig);
         if saddle {
-            // the bridges the solve could not make are where the strips are split, named
-            // in the summary: every bridge left in the strips folds within its limits, and
-            // the hub plates lie one on the other, within a fifth of a millimetre (one lap
-            // 0.124 mm into its neighbour since the plates are kept from lying over each
-            // other at their joints, docs/geometry.md 6.9)
+            // every bridge in the strips folds within its limits (where the solve cannot
+            // make one the strips are split there, and the summary names it; since the
+            // eighth session the saddle splits none), and the hub plates lie one on the
+            // other, within a fifth of a millimetre (one lap 0.18 mm into its neighbour
+            // since the plates are kept from lying over each other, docs/geometry.md 6.9)
+            let bridges = row(&built, "bridges (in strips)");
             assert!(
-                row(&built, "bridges (in strips)").contains("the strips are split there"),
-                "{}",
-                built.stdout
+                !bridges.contains("could not make") || bridges.contains("split there"),
+                "{bridges}"
             );
             bridges_hold(target, &fig);
             assert!(f(&fig, "hub_stack_lift_max") <= 0.2, "{target}: {fig}");

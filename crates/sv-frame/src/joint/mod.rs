@@ -32,7 +32,7 @@ use crate::{
 };
 use piece::{Join, Piece};
 pub(crate) use problem::joint_record;
-use problem::{edge_ratio, side_links, stacking, Problem, UNIT_COLUMNS};
+use problem::{diagonals, edge_ratio, side_links, stacking, Problem, UNIT_COLUMNS};
 use unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints};
 
 /// The target surface the hub mesh stays on.
@@ -371,6 +371,7 @@ pub fn close_joints(
         edge_ratios: (0..nf).map(|f| edge_ratio(&mesh.face_points(f))).collect(),
         pieces: Vec::new(),
         emphasis: vec![1.0; links],
+        diagonals: diagonals(&mesh.faces, nv),
         stiffness: STIFFNESS[0],
         legs: 1.0,
         joint_columns: (0..links).map(|l| 3 * nv + UNIT_COLUMNS * nf + l).collect(),
@@ -718,6 +719,7 @@ mod tests {
                 10.0,
             )],
             emphasis: vec![1.0; solved.links.len()],
+            diagonals: diagonals(&mesh.faces, nv),
             stiffness: 1.0,
             legs: 1.0,
         };

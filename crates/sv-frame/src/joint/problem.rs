@@ -11,6 +11,7 @@ use super::unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints, INPUTS};
 use super::{Anchor, JointFigures, JointOptions};
 use crate::plates::{
     edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut, reach_profile, REACH_ROWS,
+    REACH_SAMPLES,
 };
 use crate::solve::hub_overlap;
 use crate::GOAL_PLANARITY;
@@ -222,6 +223,9 @@ pub(super) struct Problem<'a> {
     /// Per strip piece: the piece, and the longest its flat length may grow to (mm): it
     /// stays on its sheet.
     pub(super) pieces: Vec<(Piece, Real)>,
+    /// Units that meet at a vertex only ([`diagonals`]): no joint joins them, but their
+    /// plates must not lie over each other there either.
+    pub(super) diagonals: Vec<[usize; 2]>,
     /// Per link: the weight of its joint, raised where the joint stays outside its limits.
     pub(super) emphasis: Vec<Real>,
     /// How far the plates' no-collision rows weigh (0 to 1): they come in
@@ -230,6 +234,54 @@ pub(super) struct Problem<'a> {
     /// A factor on the legs' weight: raised at the end, so that the legs hold to far below
     /// a micrometre with the joints where the solve put them.
     pub(super) legs: Real,
+}
+
+/// A block's gradients along its `m` columns, one row after another, from its rows'
+/// gradients along their units' points (`idx`: where each unit's inputs went); rows that do
+/// not weigh are left at zero (the assembly skips them). Empty without gradients.
+fn block_values(
+    rows: &[LinkRow],
+    units: [&UnitPoints; 2],
+    idx: &[[usize; INPUTS]; 2],
+    m: usize,
+    grad: bool,
+) -> Vec<Real> {
+    let mut vals = vec![0.0; if grad { rows.len() * m } else { 0 }];
+    for (r, v) in rows.iter().zip(vals.chunks_exact_mut(m.max(1))) {
+        if r.w == 0.0 {
+            continue;
+        }
+        for (&(side, p), gv) in r.at.iter().zip(&r.grads) {
+            if let Some(d) = &units[side].d {
+                for i in 0..INPUTS {
+                    v[idx[side][i]] += gv.dot(&d[p][i]);
+                }
+            }
+        }
+    }
+    vals
+}
+
+/// The pairs of faces that share one vertex and no side: round a vertex, the units across
+/// it from each other.
+pub(super) fn diagonals(faces: &[[usize; 4]], vertices: usize) -> Vec<[usize; 2]> {
+    let mut round = vec![Vec::new(); vertices];
+    for (f, face) in faces.iter().enumerate() {
+        for &v in face {
+            round[v].push(f);
+        }
+    }
+    let mut pairs: Vec<[usize; 2]> = round
+        .iter()
+        .flat_map(|fs| {
+            fs.iter()
+                .flat_map(move |&f| fs.iter().filter(move |&&g| g > f).map(move |&g| [f, g]))
+        })
+        .filter(|[f, g]| faces[*f].iter().filter(|v| faces[*g].contains(v)).count() == 1)
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs
 }
 
 /// Per face and side: the link across it.
@@ -510,27 +562,24 @@ impl Problem<'_> {
                 for r in rows.iter_mut().filter(|r| r.kind != 2) {
                     r.w *= self.emphasis[li];
                 }
-                // the gradients along the block's columns, one row after another (rows that
-                // do not weigh are left at zero: the assembly skips them)
                 let m = cols.len();
-                let mut vals = vec![0.0; if grad { rows.len() * m } else { 0 }];
-                for (r, v) in rows.iter().zip(vals.chunks_exact_mut(m.max(1))) {
-                    if r.w == 0.0 {
-                        continue;
+                let mut vals = block_values(&rows, [&units[f], &units[g]], &idx, m, grad);
+                for (r, v) in rows.iter().zip(vals.chunks_exact_mut(m)) {
+                    if r.w != 0.0 {
+                        v[m - 1] += r.ds / scale;
                     }
-                    for (&(side, p), gv) in r.at.iter().zip(&r.grads) {
-                        if let Some(d) = &units[[f, g][side]].d {
-                            for i in 0..INPUTS {
-                                v[idx[side][i]] += gv.dot(&d[p][i]);
-                            }
-                        }
-                    }
-                    v[m - 1] += r.ds / scale;
                 }
                 LinkBlock { cols, rows, vals }
             })
             .collect();
-        for LinkBlock { cols, rows, vals } in &blocks {
+        // units across a vertex from each other: neither plate lies over the other there
+        // either (no joint joins them; docs/geometry.md 5.5)
+        let across: Vec<LinkBlock> = self
+            .diagonals
+            .par_iter()
+            .map(|&[f, g]| self.diagonal_block(f, g, units, grad))
+            .collect();
+        for LinkBlock { cols, rows, vals } in blocks.iter().chain(&across) {
             if grad {
                 let block: Vec<(&[Real], Real, Real)> = rows
                     .iter()
@@ -555,6 +604,52 @@ impl Problem<'_> {
         g: usize,
         joint: usize,
     ) -> (Vec<usize>, [[usize; INPUTS]; 2]) {
+        let (mut cols, idx) = self.pair_columns(f, g);
+        cols.push(joint);
+        (cols, idx)
+    }
+
+    /// The rows of units `f` and `g` that meet at a vertex only: each side of either plate
+    /// as cut, how deep it lies inside the other's outline at any height (the deepest point
+    /// of [`reach_profile`] in the slab of [`OVERLAP_SLAB`]), weighed as the collision rows.
+    fn diagonal_block(&self, f: usize, g: usize, units: &[UnitPoints], grad: bool) -> LinkBlock {
+        let (cols, idx) = self.pair_columns(f, g);
+        let insets = [self.cut_inset(f), self.cut_inset(g)];
+        let slab = OVERLAP_SLAB * self.options.thickness;
+        let measure = |p: &[Point3; 8]| -> [Real; 8] {
+            let a = plate_as_cut(&[p[0], p[1], p[2], p[3]], insets[0]);
+            let b = plate_as_cut(&[p[4], p[5], p[6], p[7]], insets[1]);
+            std::array::from_fn(|i| {
+                let (into, from, k) = if i < 4 { (&a, &b, i) } else { (&b, &a, i - 4) };
+                reach_profile(into, &from[k], &from[(k + 1) % 4], slab)[REACH_SAMPLES]
+            })
+        };
+        let pts: [Point3; 8] = std::array::from_fn(|i| units[[f, g][i / 4]].points[i % 4]);
+        let now = measure(&pts);
+        let weigh = self.stiffness > 0.0 && now.iter().any(|&r| r > 0.0);
+        // the gradients only where a row weighs (one pattern: the rows are always there)
+        let grads = if grad && weigh {
+            fd_jac(&pts, 1e-4, measure)
+        } else {
+            [[Vector3::zeros(); 8]; 8]
+        };
+        let rows: Vec<LinkRow> = (0..8)
+            .map(|i| LinkRow {
+                kind: 6,
+                r: now[i],
+                w: W_COLLIDE * self.stiffness * on(now[i]),
+                at: PRIMARY,
+                grads: grads[i],
+                ds: 0.0,
+            })
+            .collect();
+        let vals = block_values(&rows, [&units[f], &units[g]], &idx, cols.len(), grad);
+        LinkBlock { cols, rows, vals }
+    }
+
+    /// The columns of two units' inputs: `f`'s, then `g`'s that are not `f`'s; and where
+    /// each unit's inputs went.
+    fn pair_columns(&self, f: usize, g: usize) -> (Vec<usize>, [[usize; INPUTS]; 2]) {
         let mut cols: Vec<usize> = Vec::with_capacity(2 * INPUTS + 1);
         let mut idx = [[0; INPUTS]; 2];
         for (side, u) in [f, g].into_iter().enumerate() {
@@ -569,7 +664,6 @@ impl Problem<'_> {
                 };
             }
         }
-        cols.push(joint);
         (cols, idx)
     }
 
@@ -905,4 +999,34 @@ pub(super) fn tangents(n: &Vector3) -> (Vector3, Vector3) {
     };
     let u1 = n.cross(&helper).normalize();
     (u1, n.cross(&u1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The faces of an `n x n` grid of quads, row by row.
+    fn grid(n: usize) -> Vec<[usize; 4]> {
+        let v = |i: usize, j: usize| j * (n + 1) + i;
+        (0..n)
+            .flat_map(|j| (0..n).map(move |i| [v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)]))
+            .collect()
+    }
+
+    #[test]
+    fn the_units_across_each_inner_vertex_are_its_two_diagonal_pairs() {
+        // 3 x 3 faces: 4 inner vertices, each with the two pairs across it
+        let faces = grid(3);
+        let pairs = diagonals(&faces, 16);
+        assert_eq!(pairs.len(), 8, "{pairs:?}");
+        for [f, g] in &pairs {
+            let shared = faces[*f].iter().filter(|v| faces[*g].contains(v)).count();
+            assert_eq!(shared, 1, "{f} {g}");
+            // across the vertex: one row and one column apart
+            assert_eq!(((f % 3) as i64 - (g % 3) as i64).abs(), 1);
+            assert_eq!(((f / 3) as i64 - (g / 3) as i64).abs(), 1);
+        }
+        // the centre face meets the four corner faces across its corners
+        assert_eq!(pairs.iter().filter(|p| p.contains(&4)).count(), 4);
+    }
 }
