@@ -42,8 +42,10 @@ pub(super) const W_STACK: Real = 10.0;
 /// Columns of one unit after its face's vertices: its plate pose increment (6), spin (1),
 /// tile scales (2) and hub lift (1).
 pub(super) const UNIT_COLUMNS: usize = 10;
-/// How far beyond one thickness apart the solve keeps lapping hub plates (mm).
-pub(super) const STACK_MARGIN: Real = 0.05;
+/// How far beyond one thickness apart the solve keeps lapping hub plates (mm). At 0.05
+/// (until the eighth session) the pavilion and the dome at 200 mm kept a lap 0.104 and
+/// 0.173 mm into its neighbour, against the check's 0.1 mm.
+pub(super) const STACK_MARGIN: Real = 0.15;
 pub(super) const W_LIMIT: Real = 100.0;
 /// A one-sided limit starts pushing at this fraction of it.
 pub(super) const MARGIN: Real = 0.8;
