@@ -326,10 +326,8 @@ fn shallower_hub(p: &sv_strips::ProfileParams, by: f64) -> String {
             number(p.rim_width)
         );
     }
-    let thinner = (1..)
-        .map(|k| p.thickness - 0.5 * k as f64)
-        .take_while(|&t| t > 0.0)
-        .filter_map(|t| p.least_for(t))
+    let thinner = p
+        .thinner_least()
         .find(|l| l.hub_inset() <= p.hub_inset() - by);
     match thinner {
         Some(l) => format!(

@@ -252,11 +252,16 @@ impl ProfileParams {
         if welds(self) {
             return Some(self.clone());
         }
+        self.thinner_least().find(welds)
+    }
+
+    /// The least profiles ([`least_for`](Self::least_for)) of the sheets thinner than
+    /// `self`'s, in 0.5 mm steps, thickest first (those that have one).
+    pub fn thinner_least(&self) -> impl Iterator<Item = Self> + '_ {
         (1..)
             .map(|k| self.thickness - 0.5 * k as f64)
             .take_while(|&t| t > 0.0)
             .filter_map(|t| self.least_for(t))
-            .find(welds)
     }
 
     /// Check every parameter; the error names the first bad one.

@@ -10,8 +10,8 @@ use super::piece::Piece;
 use super::unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints, INPUTS};
 use super::{Anchor, JointFigures, JointOptions};
 use crate::plates::{
-    edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut, reach_profile, REACH_ROWS,
-    REACH_SAMPLES,
+    edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut, reach_into, reach_profile,
+    REACH_ROWS,
 };
 use crate::solve::hub_overlap;
 use crate::GOAL_PLANARITY;
@@ -612,8 +612,9 @@ impl Problem<'_> {
     }
 
     /// The rows of units `f` and `g` that meet at a vertex only: each side of either plate
-    /// as cut, how deep it lies inside the other's outline at any height (the deepest point
-    /// of [`reach_profile`] in the slab of [`OVERLAP_SLAB`]), weighed as the collision rows.
+    /// as cut, how deep it lies inside the other's outline at any height ([`reach_into`] in
+    /// the slab of [`OVERLAP_SLAB`]: only the deepest point, not the samples the links'
+    /// rows take), weighed as the collision rows.
     fn diagonal_block(&self, f: usize, g: usize, units: &[UnitPoints], grad: bool) -> LinkBlock {
         let (cols, idx) = self.pair_columns(f, g);
         let insets = [self.cut_inset(f), self.cut_inset(g)];
@@ -623,7 +624,7 @@ impl Problem<'_> {
             let b = plate_as_cut(&[p[4], p[5], p[6], p[7]], insets[1]);
             std::array::from_fn(|i| {
                 let (into, from, k) = if i < 4 { (&a, &b, i) } else { (&b, &a, i - 4) };
-                reach_profile(into, &from[k], &from[(k + 1) % 4], slab)[REACH_SAMPLES]
+                reach_into(into, &from[k], &from[(k + 1) % 4], slab)
             })
         };
         let pts: [Point3; 8] = std::array::from_fn(|i| units[[f, g][i / 4]].points[i % 4]);
