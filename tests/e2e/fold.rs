@@ -370,7 +370,8 @@ fn a_pose_moved_2_mm_or_a_neck_moved_2_mm_fails_both_checks_naming_the_unit() {
 /// flat grid), so without a `[profile]` the build cuts the thickest sheet whose laps can
 /// (1.5 mm at its least widths, docs/config.md) and its summary says so; our own fold check
 /// finds every lap in the DXFs at least 25 mm. A config that names a profile is cut as it
-/// stands, and its short laps are an error naming the levers, nothing written. (40 joint
+/// stands, and its short laps are an error naming the levers, nothing written; at a unit
+/// size where no sheet's laps can be welded the build stops at once. (40 joint
 /// iterations in one strip direction, and none for the named profile: this is about the
 /// sheet and the laps, and the full solve takes a minute.)
 #[test]
@@ -422,4 +423,29 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
         given.stderr
     );
     assert!(!dir.join("given/frame.json").exists());
+
+    // At 150 mm no sheet the profile's rules allow laps 25 mm: 1.5 mm sheet at its least
+    // widths puts the hub 1.5 + 3 + 2 x 3 + 9 = 19.5 mm inside its tile, and a flat grid's
+    // lap (sqrt 2 - 1) L - 2 sqrt 2 inset reaches 25 mm from this unit size on; the build
+    // stops before any work and names it.
+    let small = dir.run(&[
+        "build",
+        "--target",
+        "builtin:flat",
+        "--unit-size",
+        "150",
+        "--out",
+        "small",
+    ]);
+    small.expect_code(2);
+    let line = small.one_error_line();
+    let root2 = 2f64.sqrt();
+    let least_unit = ((25.0 + 2.0 * root2 * 19.5) / (root2 - 1.0)).ceil();
+    assert!(
+        line.contains("secondary.unit_size 150")
+            && line.contains(&format!("unit_size to at least {least_unit} mm"))
+            && line.contains("primary.min_overlap"),
+        "{line}"
+    );
+    assert!(!dir.join("small").exists());
 }

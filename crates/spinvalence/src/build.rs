@@ -109,7 +109,7 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
     }
     cfg.secondary.check().map_err(|e| anyhow!("{e}"))?;
     cfg.primary.min_overlap(&cfg.profile)?;
-    let sheet = sheet_for_unit_size(&mut cfg, profile_given);
+    let sheet = sheet_for_unit_size(&mut cfg, profile_given)?;
     if !cfg.joints.close && cfg.frame != crate::config::FrameConfig::default() {
         bail!("frame: parameter overlap needs the joint solve ([joints] close = true)");
     }
@@ -164,43 +164,91 @@ pub fn load_target(spec: &str, unit: f64, quiet: bool) -> Result<TargetMesh> {
 /// The sheet the build cuts, and why: the config's `[profile]` where it has one; else the
 /// default, or, where the default's hub laps cannot reach the weld minimum at this unit
 /// size, the thickest sheet whose least profile can (`ProfileParams::for_unit_size`: the
-/// flat grid's estimate, docs/geometry.md 5.4).
-fn sheet_for_unit_size(cfg: &mut BuildConfig, given: bool) -> String {
+/// flat grid's estimate, docs/geometry.md 5.4). Where no sheet's can, not even the config's,
+/// the build stops before any work, naming the least unit size and the weld minimum that
+/// would do.
+fn sheet_for_unit_size(cfg: &mut BuildConfig, given: bool) -> Result<String> {
     let mm = |x: f64| format!("{} mm", number(x));
     let p = &cfg.profile;
-    if given {
-        return format!("{} (the config's [profile])", mm(p.thickness));
-    }
     let unit = cfg.secondary.unit_size;
     // a weld minimum that cannot be read was refused before this
     let minimum = |q: &sv_strips::ProfileParams| cfg.primary.min_overlap(q).unwrap_or(0.0);
-    match p.for_unit_size(unit, minimum) {
-        Some(q) if q == *p => format!("{} (the default)", mm(p.thickness)),
-        Some(q) => {
-            let why = format!(
-                "{} at its least widths (leg {}, neck {}, rim {}, slots {}), chosen for {} units: \
-                 the default {} sheet's hub laps would be about {} there, short of the weld \
-                 minimum {} ([profile] in a config file sets the sheet)",
-                mm(q.thickness),
-                number(q.leg_width),
-                number(q.neck_width),
-                number(q.rim_width),
-                number(q.slot_width),
-                mm(unit),
-                mm(p.thickness),
-                mm(p.flat_lap(unit)),
-                mm(minimum(p)),
-            );
-            cfg.profile = q;
-            why
-        }
-        None => format!(
-            "{} (the default; at {} units no sheet's hub laps reach the weld minimum, \
-             docs/geometry.md 5.4)",
-            mm(p.thickness),
-            mm(unit)
-        ),
+    let Some(fits) = p.for_unit_size(unit, minimum) else {
+        return Err(no_sheet_welds(p, unit, minimum));
+    };
+    if given {
+        return Ok(format!("{} (the config's [profile])", mm(p.thickness)));
     }
+    if fits == *p {
+        return Ok(format!("{} (the default)", mm(p.thickness)));
+    }
+    let why = format!(
+        "{} at its least widths (leg {}, neck {}, rim {}, slots {}), chosen for {} units: the \
+         default {} sheet's hub laps would be about {} there, short of the weld minimum {} \
+         ([profile] in a config file sets the sheet)",
+        mm(fits.thickness),
+        number(fits.leg_width),
+        number(fits.neck_width),
+        number(fits.rim_width),
+        number(fits.slot_width),
+        mm(unit),
+        mm(p.thickness),
+        mm(p.flat_lap(unit)),
+        mm(minimum(p)),
+    );
+    cfg.profile = fits;
+    Ok(why)
+}
+
+/// Why no sheet's hub laps reach the weld minimum at `unit` mm, with the two levers: the
+/// least unit size at which the sheet with the shallowest hub (the thinnest sheet the
+/// profile's rules allow, at its least widths) reaches it, and the weld minimum that sheet
+/// reaches at this size, both by the flat grid's lap (docs/geometry.md 5.4); the shortest
+/// lap of every curved target measured was shorter than that.
+fn no_sheet_welds(
+    p: &sv_strips::ProfileParams,
+    unit: f64,
+    minimum: impl Fn(&sv_strips::ProfileParams) -> f64,
+) -> anyhow::Error {
+    let best = std::iter::once(p.clone())
+        .chain(p.least_for(p.thickness))
+        .chain(p.thinner_least())
+        .min_by(|a, b| a.hub_inset().total_cmp(&b.hub_inset()))
+        .expect("the profile itself is a candidate");
+    let need = minimum(&best);
+    let lap = best.flat_lap(unit);
+    let least_unit = (need + 2.0 * 2f64.sqrt() * best.hub_inset()) / (2f64.sqrt() - 1.0);
+    let (reach, lower) = if lap > 0.0 {
+        let most = (lap * 10.0).floor() / 10.0;
+        (
+            format!("the most is about {} mm", number(lap)),
+            format!(
+                ", or lower primary.min_overlap to {most:.1} mm or less (short of the AWS \
+                 D1.1 lap of max(5 t, 25 mm))"
+            ),
+        )
+    } else {
+        (
+            format!(
+                "the hub plates miss each other by about {} mm",
+                number(-lap)
+            ),
+            String::new(),
+        )
+    };
+    anyhow!(
+        "secondary.unit_size {}: no sheet's hub laps reach the weld minimum {} mm at this \
+         unit size: {reach} with {} mm sheet at its least widths (leg {}, rim {}, slots {}; \
+         the flat grid's lap, docs/geometry.md 5.4); raise secondary.unit_size to at least \
+         {:.0} mm{lower}",
+        number(unit),
+        number(need),
+        number(best.thickness),
+        number(best.leg_width),
+        number(best.rim_width),
+        number(best.slot_width),
+        least_unit.ceil(),
+    )
 }
 
 /// A target too small for 2 x 2 units is most often drawn in metres or inches: say so
