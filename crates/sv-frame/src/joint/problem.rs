@@ -841,14 +841,16 @@ impl Problem<'_> {
             .collect()
     }
 
-    /// The links still bridges whose joints at `x` are outside a bridge's limits.
-    /// Whether a weld is outside its limits (its plates apart or into each other).
+    /// Whether a weld is outside [`MARGIN`] of its limits (its plates apart or into each
+    /// other): within its limits, but so near them that another solve's round-off could
+    /// take it past, counts as open.
     pub(super) fn welds_open(&self, x: &[Real], units: &[UnitPoints]) -> bool {
-        let limits = &self.options.limits;
+        let limits = self.options.limits.within(MARGIN);
         let records = self.records(x, units);
         (records.iter().enumerate()).any(|(li, j)| !self.bridges[li] && !limits.holds(j))
     }
 
+    /// The links still bridges whose joints at `x` are outside a bridge's limits.
     pub(super) fn failing_bridges(
         &self,
         x: &[Real],
