@@ -43,6 +43,20 @@ pub fn default_build() -> &'static (Dir, Output) {
     })
 }
 
+/// `spinvalence build --target builtin:saddle` with the nest stage's [`NEST_WORK`], run once
+/// per test run in `target/tmp/e2e-saddle-build` and shared by the tests that read its
+/// output (the fold check's and the face marks').
+pub fn saddle_build() -> &'static (Dir, Output) {
+    static BUILD: OnceLock<(Dir, Output)> = OnceLock::new();
+    BUILD.get_or_init(|| {
+        let dir = Dir::persistent("e2e-saddle-build");
+        let mut args = vec!["build", "--target", "builtin:saddle"];
+        args.extend(NEST_WORK);
+        let out = dir.run(&args);
+        (dir, out)
+    })
+}
+
 #[test]
 fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
     let (dir, out) = default_build();

@@ -13,7 +13,7 @@ use serde_json::Value;
 use sv_geom::planar::segment_distance;
 use sv_nest::part::point_in_polygon;
 
-use crate::build::{default_build, NEST_WORK};
+use crate::build::{default_build, saddle_build};
 use crate::report::parse_csv;
 use crate::sheets::flatten;
 use crate::util::{dxf_entities, num, read_json, Dir, DxfEntity};
@@ -363,15 +363,13 @@ fn every_unit_of_the_default_build_marks_the_face_its_hub_comes_out_of() {
 
 #[test]
 fn the_saddle_marks_its_hubs_too() {
-    // at 320 mm (300 mm gives laps below the weld minimum on the saddle)
-    let dir = Dir::new();
-    let mut args = vec!["build", "--target", "builtin:saddle", "--unit-size", "320"];
-    args.extend(NEST_WORK);
-    dir.run(&args).expect_code(0);
-    let (towards, away) = check_face_marks(&dir);
+    // the saddle's build shared with the fold check's test
+    let (dir, out) = saddle_build();
+    out.expect_code(0);
+    let (towards, away) = check_face_marks(dir);
     eprintln!("saddle: {towards} hubs out of the etched face, {away} out of the back");
     assert!(towards + away > 100);
-    check_labels_upright(&dir);
+    check_labels_upright(dir);
 }
 
 #[test]
