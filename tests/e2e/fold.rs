@@ -152,16 +152,25 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
             "{name}: {theirs} vs {fig}"
         );
     }
-    // and about as many legs run into the rims (a leg at the limit may fall either side)
-    let line = row(checked, "leg through a neighbour's rim");
-    let theirs: f64 = line
-        .rsplit("; ")
-        .next()
-        .and_then(|t| t.split_whitespace().next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("no count of legs in {line}"));
-    let ours = f(fig, "legs_into_rims");
-    assert!((theirs - ours).abs() <= 2.0, "{line} vs {ours} legs");
+    // and about as many legs run through the neighbours' hub plates and into their rims (a
+    // leg at the limit may fall either side)
+    for (name, ours) in [
+        (
+            "leg through the neighbour's hub plate, outside its relief",
+            "legs_through_hub_plates",
+        ),
+        ("leg through a neighbour's rim", "legs_into_rims"),
+    ] {
+        let line = row(checked, name);
+        let theirs: f64 = line
+            .rsplit("; ")
+            .next()
+            .and_then(|t| t.split_whitespace().next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no count of legs in {line}"));
+        let ours = f(fig, ours);
+        assert!((theirs - ours).abs() <= 2.0, "{line} vs {ours} legs");
+    }
 }
 
 /// Issue 14's and 15's joints by our own measure: every bridge of every strip found in the

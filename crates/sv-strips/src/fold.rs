@@ -223,6 +223,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         "leg through the neighbour's hub plate, outside its relief (mm)",
         limits.collision,
     );
+    let mut into_plates = 0;
     let thickness = params.thickness;
     for (li, link) in frame.links.iter().enumerate() {
         let [a, b] = link.units;
@@ -240,7 +241,11 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         for (f, g) in [(fa, fb), (fb, fa)] {
             for leg in f.legs.iter().flatten() {
                 let section = section_in_plate(leg, &g.placed, thickness);
-                legs_through.see(into_steel(&section, &g.placed.layout.hub, &g.slots), at);
+                let depth = into_steel(&section, &g.placed.layout.hub, &g.slots);
+                if depth > limits.collision {
+                    into_plates += 1;
+                }
+                legs_through.see(depth, at);
             }
         }
         if let Some((low, high)) = lap_heights(&fa.placed.hub_plate, &fb.placed.hub_plate) {
@@ -353,31 +358,18 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         }
     }
     let mut rows: Vec<_> = [
-        pins,
-        legs,
-        plates,
-        laps,
-        claims,
-        welds,
-        collisions,
-        span,
-        bend,
-        twist,
-        rims,
-        rebuilt,
-        through,
-        stacked,
-        legs_through,
+        pins, legs, plates, laps, claims, welds, collisions, span, bend, twist, rims, rebuilt,
+        through, stacked,
     ]
     .into_iter()
     .map(Worst::row)
     .collect();
-    let mut legs_rims = legs_rims.row();
-    legs_rims.at = format!(
-        "{}; {into_rims} legs over {} mm",
-        legs_rims.at, limits.collision
-    );
-    rows.push(legs_rims);
+    // the two rows of legs say how many legs are over the limit, not only the deepest
+    for (legs, over) in [(legs_through, into_plates), (legs_rims, into_rims)] {
+        let mut row = legs.row();
+        row.at = format!("{}; {over} legs over {} mm", row.at, limits.collision);
+        rows.push(row);
+    }
     CheckReport { rows }
 }
 
