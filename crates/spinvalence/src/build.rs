@@ -67,14 +67,13 @@ pub struct StageOptions {
 /// The config after the command line has overridden the file, and the stage options it
 /// gives, every value checked before any work starts.
 pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
-    let mut profile_given = false;
-    let mut cfg = match &args.config {
+    let (mut cfg, profile_given) = match &args.config {
         Some(path) => {
             let text = output::read_text(path)?;
-            profile_given = config::sets_profile(&text);
-            config::parse(&text, &path.display().to_string())?
+            let file = config::read(&text, &path.display().to_string())?;
+            (file.config, file.sets_profile)
         }
-        None => BuildConfig::default(),
+        None => (BuildConfig::default(), false),
     };
     if let Some(target) = &args.target {
         cfg.target = target.clone();

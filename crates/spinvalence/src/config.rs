@@ -423,8 +423,15 @@ impl PrimaryConfig {
     }
 }
 
-/// Parse a config file's text; errors are one line naming `name:line:column`.
-pub fn parse(text: &str, name: &str) -> Result<BuildConfig> {
+/// A config file as read: its parameters, and whether it names the sheet.
+pub struct ConfigFile {
+    pub config: BuildConfig,
+    /// The file has a `[profile]` (without one the sheet follows the unit size).
+    pub sets_profile: bool,
+}
+
+/// Read a config file's text; errors are one line naming `name:line:column`.
+pub fn read(text: &str, name: &str) -> Result<ConfigFile> {
     let config: BuildConfig = toml::from_str(text).map_err(|e| {
         let (line, column) = e
             .span()
@@ -433,22 +440,24 @@ pub fn parse(text: &str, name: &str) -> Result<BuildConfig> {
         let message = e.message().replace(['\n', '\r'], " ");
         anyhow!("{name}:{line}:{column}: {}", message.trim_end_matches('.'))
     })?;
-    check_profile_keys(text, name)?;
-    Ok(config)
-}
-
-/// Whether a config file sets `[profile]` (without one the sheet follows the unit size).
-pub fn sets_profile(text: &str) -> bool {
-    toml::from_str::<toml::Table>(text).is_ok_and(|t| t.contains_key("profile"))
+    // valid as a BuildConfig, so valid TOML
+    let table: toml::Table = toml::from_str(text).map_err(|e| anyhow!("{name}: {e}"))?;
+    let sets_profile = match table.get("profile") {
+        Some(toml::Value::Table(profile)) => {
+            check_profile_keys(profile, text, name)?;
+            true
+        }
+        _ => false,
+    };
+    Ok(ConfigFile {
+        config,
+        sets_profile,
+    })
 }
 
 /// `[profile]` is `sv_strips::ProfileParams`, which `strips.json` flattens and so cannot
 /// deny unknown fields itself: compare its keys with the known ones here.
-fn check_profile_keys(text: &str, name: &str) -> Result<()> {
-    let table: toml::Table = toml::from_str(text).map_err(|e| anyhow!("{name}: {e}"))?;
-    let Some(toml::Value::Table(profile)) = table.get("profile") else {
-        return Ok(());
-    };
+fn check_profile_keys(profile: &toml::Table, text: &str, name: &str) -> Result<()> {
     let known = toml::Table::try_from(ProfileParams::default())
         .map_err(|e| anyhow!("profile defaults: {e}"))?;
     if let Some(key) = profile.keys().find(|k| !known.contains_key(*k)) {
@@ -483,6 +492,25 @@ pub fn default_toml() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`read`]'s parameters alone.
+    fn parse(text: &str, name: &str) -> Result<BuildConfig> {
+        read(text, name).map(|file| file.config)
+    }
+
+    #[test]
+    fn a_file_names_the_sheet_only_with_a_profile() {
+        assert!(
+            !read("[secondary]\nunit_size = 200.0\n", "c.toml")
+                .unwrap()
+                .sets_profile
+        );
+        assert!(
+            read("[profile]\nthickness = 2.0\n", "c.toml")
+                .unwrap()
+                .sets_profile
+        );
+    }
 
     #[test]
     fn empty_file_is_all_defaults() {
