@@ -634,9 +634,14 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         let overlaps = &solved.evaluation.overlaps;
         let min = overlaps.iter().copied().fold(f64::INFINITY, f64::min);
         let max = overlaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let unit = report.mean_edge;
-        let mut rows = summary_rows(&cfg, &report, unit, &solved.report, (min, max), &timings);
-        rows.insert(3, vec!["sheet".into(), options.sheet.clone()]);
+        let mut rows = summary_rows(
+            &cfg,
+            &report,
+            &options.sheet,
+            &solved.report,
+            (min, max),
+            &timings,
+        );
         if let Some(j) = &joints {
             let at = rows.len() - 2;
             let mut joint = joint_rows(j, cfg.strips.direction, &frame);
@@ -916,16 +921,18 @@ fn finish(bar: &ProgressBar) {
 fn summary_rows(
     cfg: &BuildConfig,
     s: &SecondaryReport,
-    unit: f64,
+    sheet: &str,
     p: &sv_frame::SolveReport,
     overlap: (f64, f64),
     t: &Timings,
 ) -> Vec<Vec<String>> {
     let mm = |x: f64| format!("{} mm", number(x));
+    let unit = s.mean_edge;
     let rows: Vec<[String; 2]> = vec![
         ["target".into(), cfg.target.clone()],
         ["units".into(), s.faces.to_string()],
         ["mean edge".into(), mm(unit)],
+        ["sheet".into(), sheet.into()],
         [
             "planarity max".into(),
             format!("{:.5} (diagonal distance / edge)", s.planarity_max),

@@ -516,14 +516,15 @@ pub fn close_joints(
         // the bridges the solve could not make (its iterations used up): the strips are
         // split there, and the welds that take their place get a round of their own, polished
         // again (a few rounds, as a round may leave a bridge beside them outside its limits).
-        let failing = problem.failing_bridges(&x, &units);
+        let records = problem.records(&x, &units);
+        let failing = problem.failing_bridges(&records);
         if options.split_iterations == 0 || rounds == SPLIT_ROUNDS {
             break;
         }
         // every bridge made and none split, but welds left open or within a fifth of
         // their limits (MARGIN): a round for them, polished again (only then: a frame
         // that closes with room to spare is the same)
-        if failing.is_empty() && (!demoted.is_empty() || !problem.welds_open(&x, &units)) {
+        if failing.is_empty() && (!demoted.is_empty() || !problem.welds_open(&records)) {
             break;
         }
         rounds += 1;

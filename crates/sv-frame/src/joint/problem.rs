@@ -841,25 +841,19 @@ impl Problem<'_> {
             .collect()
     }
 
-    /// Whether a weld is outside [`MARGIN`] of its limits (its plates apart or into each
-    /// other): within its limits, but so near them that another solve's round-off could
-    /// take it past, counts as open.
-    pub(super) fn welds_open(&self, x: &[Real], units: &[UnitPoints]) -> bool {
+    /// Whether a weld of `records` (every link's joint, [`Problem::records`]) is outside
+    /// [`MARGIN`] of its limits (its plates apart or into each other): within its limits,
+    /// but so near them that another solve's round-off could take it past, counts as open.
+    pub(super) fn welds_open(&self, records: &[JointRecord]) -> bool {
         let limits = self.options.limits.within(MARGIN);
-        let records = self.records(x, units);
         (records.iter().enumerate()).any(|(li, j)| !self.bridges[li] && !limits.holds(j))
     }
 
-    /// The links still bridges whose joints at `x` are outside a bridge's limits.
-    pub(super) fn failing_bridges(
-        &self,
-        x: &[Real],
-        units: &[UnitPoints],
-    ) -> Vec<(usize, JointRecord)> {
-        self.records(x, units)
-            .into_iter()
-            .enumerate()
+    /// The links of `records` still bridges whose joints are outside a bridge's limits.
+    pub(super) fn failing_bridges(&self, records: &[JointRecord]) -> Vec<(usize, JointRecord)> {
+        (records.iter().enumerate())
             .filter(|(li, j)| self.bridges[*li] && !self.options.limits.bridge_holds(j))
+            .map(|(li, j)| (li, *j))
             .collect()
     }
 
