@@ -209,14 +209,10 @@ fn no_sheet_welds(
     unit: f64,
     minimum: impl Fn(&sv_strips::ProfileParams) -> f64,
 ) -> anyhow::Error {
-    let best = std::iter::once(p.clone())
-        .chain(p.least_for(p.thickness))
-        .chain(p.thinner_least())
-        .min_by(|a, b| a.hub_inset().total_cmp(&b.hub_inset()))
-        .expect("the profile itself is a candidate");
+    let best = p.shallowest_hub();
     let need = minimum(&best);
     let lap = best.flat_lap(unit);
-    let least_unit = (need + 2.0 * 2f64.sqrt() * best.hub_inset()) / (2f64.sqrt() - 1.0);
+    let least_unit = best.unit_for_flat_lap(need);
     let (reach, lower) = if lap > 0.0 {
         let most = (lap * 10.0).floor() / 10.0;
         (

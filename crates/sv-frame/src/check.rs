@@ -74,6 +74,8 @@ pub struct Worst {
     /// `true`: the value must stay at or above the limit (laps), else at or below.
     at_least: bool,
     worst: Option<(Real, String)>,
+    /// How many values seen were outside the limit (a NaN counts).
+    outside: usize,
 }
 
 impl Worst {
@@ -84,6 +86,7 @@ impl Worst {
             limit,
             at_least: false,
             worst: None,
+            outside: 0,
         }
     }
 
@@ -97,6 +100,12 @@ impl Worst {
 
     /// Take `value`, found where `at` says, if it is the worst so far.
     pub fn see(&mut self, value: Real, at: impl FnOnce() -> String) {
+        let within = if self.at_least {
+            value >= self.limit
+        } else {
+            value <= self.limit
+        };
+        self.outside += usize::from(!within);
         let worse = match &self.worst {
             None => true,
             Some((w, _)) if w.is_nan() => false,
@@ -112,6 +121,11 @@ impl Worst {
         if worse {
             self.worst = Some((value, at()));
         }
+    }
+
+    /// How many values seen were outside the limit.
+    pub fn outside(&self) -> usize {
+        self.outside
     }
 
     /// The row: the worst value (none seen: 0, or infinity for an at-least check, at `-`).

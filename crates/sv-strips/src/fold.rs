@@ -223,7 +223,6 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         "leg through the neighbour's hub plate, outside its relief (mm)",
         limits.collision,
     );
-    let mut into_plates = 0;
     let thickness = params.thickness;
     for (li, link) in frame.links.iter().enumerate() {
         let [a, b] = link.units;
@@ -241,11 +240,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         for (f, g) in [(fa, fb), (fb, fa)] {
             for leg in f.legs.iter().flatten() {
                 let section = section_in_plate(leg, &g.placed, thickness);
-                let depth = into_steel(&section, &g.placed.layout.hub, &g.slots);
-                if depth > limits.collision {
-                    into_plates += 1;
-                }
-                legs_through.see(depth, at);
+                legs_through.see(into_steel(&section, &g.placed.layout.hub, &g.slots), at);
             }
         }
         if let Some((low, high)) = lap_heights(&fa.placed.hub_plate, &fb.placed.hub_plate) {
@@ -318,8 +313,6 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     // a plate against the rims of the units round that corner (inside a rim a primary
     // plate is open: its slots, and the hub and legs that left it)
     let mut legs_rims = Worst::max("leg through a neighbour's rim (mm)", limits.collision);
-    // how many legs run more than a collision's limit into a rim
-    let mut into_rims = 0;
     let mut round: HashMap<usize, Vec<usize>> = HashMap::new();
     for (u, face) in frame.mesh.faces.iter().enumerate() {
         for &v in face {
@@ -345,9 +338,6 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
                     continue;
                 };
                 let depth = rim_reach(leg, &g.plate, widths.rim, thickness);
-                if depth > limits.collision {
-                    into_rims += 1;
-                }
                 legs_rims.see(depth, || {
                     format!(
                         "unit {} leg {k} into {}",
@@ -365,7 +355,8 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     .map(Worst::row)
     .collect();
     // the two rows of legs say how many legs are over the limit, not only the deepest
-    for (legs, over) in [(legs_through, into_plates), (legs_rims, into_rims)] {
+    for legs in [legs_through, legs_rims] {
+        let over = legs.outside();
         let mut row = legs.row();
         row.at = format!("{}; {over} legs over {} mm", row.at, limits.collision);
         rows.push(row);

@@ -243,6 +243,26 @@ impl ProfileParams {
         (2f64.sqrt() - 1.0) * unit - 2.0 * 2f64.sqrt() * self.hub_inset()
     }
 
+    /// The unit size whose [`flat_lap`](Self::flat_lap) is `lap`.
+    pub fn unit_for_flat_lap(&self, lap: f64) -> f64 {
+        (lap + 2.0 * 2f64.sqrt() * self.hub_inset()) / (2f64.sqrt() - 1.0)
+    }
+
+    /// Of this profile, its least widths and the least profiles of thinner sheets
+    /// ([`thinner_least`](Self::thinner_least)), the one whose hub lies least deep in its
+    /// tile (the first of equals): the longest laps any sheet gives at a unit size.
+    pub fn shallowest_hub(&self) -> Self {
+        (self.least_for(self.thickness).into_iter())
+            .chain(self.thinner_least())
+            .fold(self.clone(), |best, q| {
+                if q.hub_inset() < best.hub_inset() {
+                    q
+                } else {
+                    best
+                }
+            })
+    }
+
     /// The sheet for units of side `unit` when the user names none: `self` where its
     /// [`flat_lap`](Self::flat_lap) reaches `min_overlap` of it, else the least profile
     /// ([`least_for`](Self::least_for)) of the thickest sheet, in 0.5 mm steps below
@@ -451,7 +471,14 @@ mod tests {
         // 180 mm: 1.5 mm gives 19.4 mm, and no thinner sheet has a profile
         assert_eq!(d.for_unit_size(180.0, aws), None);
         // a lower weld minimum keeps the default longer
-        assert_eq!(d.for_unit_size(200.0, |_| 0.0), Some(d));
+        assert_eq!(d.for_unit_size(200.0, |_| 0.0), Some(d.clone()));
+        // the longest laps any sheet gives: 1.5 mm at its least, the hub 19.5 mm in, 25 mm
+        // from (25 + 2.82843 x 19.5) / 0.41421 = 193.51 mm on
+        let best = d.shallowest_hub();
+        assert_eq!(best, d.least_for(1.5).unwrap());
+        assert!((best.hub_inset() - 19.5).abs() < 1e-12);
+        assert!((best.unit_for_flat_lap(25.0) - 193.5097).abs() < 1e-3);
+        assert!((best.flat_lap(best.unit_for_flat_lap(25.0)) - 25.0).abs() < 1e-9);
     }
 
     #[test]

@@ -281,8 +281,8 @@ pub(super) fn diagonals(faces: &[[usize; 4]], vertices: usize) -> Vec<[usize; 2]
         })
         .filter(|[f, g]| faces[*f].iter().filter(|v| faces[*g].contains(v)).count() == 1)
         .collect();
+    // found once each (at the one vertex they share), in face order
     pairs.sort_unstable();
-    pairs.dedup();
     pairs
 }
 
