@@ -178,6 +178,15 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
 /// few degrees); every weld between strips found, its plates at most 1.5 mm apart and as
 /// frame.json says; no plate 0.1 mm into its neighbour.
 fn joints_hold(what: &str, fig: &Value) {
+    plates_hold(what, fig);
+    // and the leg that runs down through the lower plate at a lap passes through the relief
+    // cut for it: the leg as a plate, its section through the plate, clear of its steel
+    assert!(f(fig, "leg_through_hub_plate_max") <= 0.1, "{what}: {fig}");
+}
+
+/// [`joints_hold`] but the reliefs: every bridge and weld within its limits, the hub
+/// plates lying one on the other, no leg in a neighbour's rim.
+fn plates_hold(what: &str, fig: &Value) {
     bridges_hold(what, fig);
     assert!(f(fig, "welds_checked") > 0.0, "{what}: {fig}");
     assert!(f(fig, "weld_gap_max") <= 1.5, "{what}: {fig}");
@@ -185,9 +194,6 @@ fn joints_hold(what: &str, fig: &Value) {
     assert!(f(fig, "reach_max") <= 0.1, "{what}: {fig}");
     // the hub plates lie one on the other at every lap, never through it
     assert!(f(fig, "hub_stack_lift_max") <= 0.1, "{what}: {fig}");
-    // and the leg that runs down through the lower plate at a lap passes through the relief
-    // cut for it: the leg as a plate, its section through the plate, clear of its steel
-    assert!(f(fig, "leg_through_hub_plate_max") <= 0.1, "{what}: {fig}");
     // nor does a leg leaving its plate at the rim neck run through a neighbour's rim there
     // (that neighbour's plate lying under the corner, docs/geometry.md 5.5)
     assert!(f(fig, "leg_into_rim_max") <= 0.1, "{what}: {fig}");
@@ -220,9 +226,9 @@ fn bridges_hold(what: &str, fig: &Value) {
 /// Issue 14's acceptance on the other targets at 300 mm with the default parameters, by our
 /// own fold code: every leg within 0.5 mm of its length, every hub lap of at least the weld
 /// minimum and reported within 0.1 mm of what the parts show, and the slots as the profile
-/// rules draw them. The joints close on the dome, the vault and the hypar; on the saddle
-/// the strips are split where bridges cannot be made, and some welds stay open
-/// (docs/geometry.md 6.9): the build and `check` say so with our figures.
+/// rules draw them. The joints close on all four; on the saddle a few legs run through a
+/// lower hub plate where no relief could be cut (docs/geometry.md 5.5, 6.9): the build and
+/// `check` say so with our figures.
 #[test]
 fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
     let hypar = concat!(
@@ -255,39 +261,22 @@ fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
         let checked = dir.run(&["check", "out"]);
         agrees_with_check(&checked, &fig);
         if saddle {
-            // every bridge in the strips folds within its limits (where the solve cannot
-            // make one the strips are split there, and the summary names it; since the
-            // eighth session the saddle splits none), and the hub plates lie one on the
-            // other, within a fifth of a millimetre (one lap 0.18 mm into its neighbour
-            // since the plates are kept from lying over each other, docs/geometry.md 6.9)
-            let bridges = row(built, "bridges (in strips)");
-            assert!(
-                !bridges.contains("could not make") || bridges.contains("split there"),
-                "{bridges}"
-            );
-            bridges_hold(target, &fig);
-            assert!(f(&fig, "hub_stack_lift_max") <= 0.2, "{target}: {fig}");
-            // open joints are named, by the build's check as by ours
+            // every bridge and weld within its limits (since the tenth session's weld
+            // rounds, docs/geometry.md 6.6), the hub plates one on the other, no leg in a
+            // rim; what fails is a few legs through a lower hub plate where no straight
+            // relief keeps the rules (5.5): named, by the build's check as by ours, with
+            // the same count
+            plates_hold(target, &fig);
+            let open = row(built, "joints outside limits");
+            assert!(open.contains("none: every bridge and weld"), "{open}");
+            let legs = fig["legs_through_hub_plates"].as_u64().unwrap();
+            assert!(legs > 0, "{target}: {fig}");
             checked.expect_code(1);
             assert_eq!(code, 1, "{target}: {stdout}");
-            assert!(row(&checked, "weld: plates of neighbouring strips apart").ends_with("FAIL"));
-            // and the summary says why the worst stay open: plates edge to edge at an angle
-            // in their plane, naming a weld our check finds open
-            let open = row(built, "joints outside limits");
-            let at = open
-                .split("deg at ")
-                .nth(1)
-                .and_then(|t| t.split(')').next())
-                .unwrap_or_else(|| panic!("no turned weld named: {open}"))
-                .replace(" - ", "~");
+            let through = row(&checked, "leg through the neighbour's hub plate");
             assert!(
-                fig["failing"]["weld"]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .chain(fig["failing"]["reach"].as_array().unwrap())
-                    .any(|w| w.as_str() == Some(at.as_str())),
-                "{at} is not open by our measure: {fig}"
+                through.ends_with("FAIL") && through.contains(&format!("; {legs} legs over")),
+                "{through}"
             );
         } else {
             assert_eq!(code, 0, "{target}: {stdout}");
@@ -295,6 +284,43 @@ fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
             joints_hold(target, &fig);
         }
     }
+}
+
+/// Issue 14's acceptance at 200 mm with the sheet the build picks for that size (1.5 mm at
+/// its least widths), on the saddle, the one target that does not close at 300 mm: by our
+/// own fold code every leg within 0.5 mm, every hub lap at least 25 mm, every bridge and
+/// weld within its limits, no plate or leg into another; `check` agrees, and passes. (One
+/// strip direction, the one the build keeps when it tries both, to keep the test short;
+/// the other targets at 200 mm: docs/geometry.md 6.9.)
+#[test]
+fn at_200_mm_the_saddle_folds_and_closes_every_joint() {
+    let dir = Dir::new();
+    let mut args = vec![
+        "build",
+        "--target",
+        "builtin:saddle",
+        "--unit-size",
+        "200",
+        "--strip-direction",
+        "v",
+        "--quiet",
+    ];
+    args.extend(crate::build::NEST_WORK);
+    let built = dir.run(&args);
+    built.expect_code(0);
+    let frame = read_json(&dir.join("out/frame.json"));
+    assert_eq!(frame["params"]["thickness"], 1.5, "{}", frame["params"]);
+    let units = frame["units"].as_array().unwrap().len();
+    let (code, stdout, fig) = fold_check(&dir);
+    assert_eq!(code, 0, "{stdout}");
+    assert_eq!(fig["legs_checked"], 4 * units, "{fig}");
+    assert!(f(&fig, "leg_error_max") <= 0.5, "{fig}");
+    assert!(f(&fig, "lap_min") >= 25.0, "{fig}");
+    assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{fig}");
+    joints_hold("saddle at 200 mm", &fig);
+    let checked = dir.run(&["check", "out"]);
+    agrees_with_check(&checked, &fig);
+    checked.expect_code(0);
 }
 
 /// The row of `check`'s table that starts with `name`.

@@ -503,7 +503,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
                 finish(&bar);
                 let closed =
                     closed.map_err(|e| anyhow!("{}: closing the joints: {e}", cfg.target))?;
-                let score = JointScore::of(&closed.1, &joint_options.limits, min_overlap);
+                let score = JointScore::of(&closed, &joint_options.limits, min_overlap);
                 Ok((score, direction, closed))
             })
             .collect();
@@ -727,17 +727,19 @@ fn other_direction(d: sv_strips::StripDirection) -> sv_strips::StripDirection {
 }
 
 /// How well a frame's joints hold: how many hub laps are below the weld minimum (a build
-/// with any is not written), then how many joints are outside their limits, then the worst
-/// excess as a multiple of its limit.
+/// with any is not written), then whether any joint is outside its limits, then how many
+/// joints the strips do not make as planned (outside their limits, or bridges split and
+/// welded on site instead), then the worst excess as a multiple of its limit.
 #[derive(Clone, Copy, Debug)]
 struct JointScore {
     short_laps: usize,
     failing: usize,
+    splits: usize,
     worst: f64,
 }
 
 impl JointScore {
-    fn of(solved: &sv_frame::Solved, limits: &sv_frame::JointLimits, min_overlap: f64) -> Self {
+    fn of((_, solved, report): &Closed, limits: &sv_frame::JointLimits, min_overlap: f64) -> Self {
         let records = solved.joints.as_ref().map_or(&[][..], |j| &j.records[..]);
         Self {
             short_laps: solved
@@ -747,12 +749,25 @@ impl JointScore {
                 .filter(|&&o| o < min_overlap)
                 .count(),
             failing: records.iter().filter(|j| !limits.holds(j)).count(),
+            splits: report.splits.len(),
             worst: records.iter().map(|j| limits.excess(j)).fold(0.0, f64::max),
         }
     }
 
+    /// The key, least best: 87 bridges split to leave 4 welds open is worse than none
+    /// split and 5 open (the saddle at 300 mm), but a frame whose joints all hold is better
+    /// than any that does not.
+    fn key(&self) -> (usize, bool, usize, f64) {
+        (
+            self.short_laps,
+            self.failing > 0,
+            self.failing + self.splits,
+            self.worst,
+        )
+    }
+
     fn better_than(&self, other: &Self) -> bool {
-        (self.short_laps, self.failing, self.worst) < (other.short_laps, other.failing, other.worst)
+        self.key() < other.key()
     }
 }
 

@@ -32,7 +32,7 @@ use crate::{
 };
 use piece::{Join, Piece};
 pub(crate) use problem::joint_record;
-use problem::{diagonals, edge_ratio, side_links, stacking, Problem, UNIT_COLUMNS};
+use problem::{diagonals, edge_ratio, side_links, stacking, Problem, MARGIN, UNIT_COLUMNS};
 use unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints};
 
 /// The target surface the hub mesh stays on.
@@ -58,9 +58,10 @@ pub struct Anchor {
 pub struct JointOptions {
     /// Largest number of Levenberg-Marquardt iterations.
     pub max_iterations: usize,
-    /// Iterations after the bridges the solve could not make are split (welded on site
-    /// instead): only when there are such bridges, on top of `max_iterations`, per round
-    /// of splits (at most three, each polished again as the legs' polish of the budget).
+    /// Iterations of a round after the bridges the solve could not make are split (welded
+    /// on site instead), or while welds are left open: only then, on top of
+    /// `max_iterations`, each round polished again as the legs' polish of the budget (at
+    /// most ten rounds, docs/geometry.md 6.6).
     pub split_iterations: usize,
     /// Largest distance of a vertex from its anchor plane (and line), as a fraction of the
     /// mean side.
@@ -182,8 +183,12 @@ const STALL: Real = 1e-6;
 /// The legs' weight factors of the polish at the end, and its iterations per factor.
 const LEG_POLISH: [Real; 2] = [30.0, 1000.0];
 const POLISH_ITERATIONS: usize = 10;
-/// Rounds of splitting the bridges that cannot be made, at most.
-const SPLIT_ROUNDS: usize = 3;
+/// Rounds of splitting the bridges that cannot be made, or of closing the welds left
+/// open, at most.
+const ROUNDS: usize = 10;
+/// A round for the welds follows one that narrowed the worst of them at least this much
+/// (relative): where they stall, more rounds only cost time.
+const WELD_PROGRESS: Real = 0.02;
 /// The stages of [`Problem::stiffness`].
 const STIFFNESS: [Real; 4] = [0.0, 0.03, 0.1, 0.3];
 
@@ -497,6 +502,8 @@ pub fn close_joints(
         )?;
     }
     let mut rounds = 0;
+    // the worst weld's excess when the last round for the welds began
+    let mut weld_excess = Real::INFINITY;
     loop {
         // the legs made stiffer step by step, the rest as it was: where a unit sits near a
         // singular pose (a nearly symmetric tile) its legs' last micrometre would otherwise
@@ -518,14 +525,21 @@ pub fn close_joints(
         // again (a few rounds, as a round may leave a bridge beside them outside its limits).
         let records = problem.records(&x, &units);
         let failing = problem.failing_bridges(&records);
-        if options.split_iterations == 0 || rounds == SPLIT_ROUNDS {
+        if options.split_iterations == 0 || rounds == ROUNDS {
             break;
         }
-        // every bridge made and none split, but welds left open or within a fifth of
-        // their limits (MARGIN): a round for them, polished again (only then: a frame
-        // that closes with room to spare is the same)
-        if failing.is_empty() && (!demoted.is_empty() || !problem.welds_open(&records)) {
-            break;
+        // every bridge made (or split in an earlier round), but welds left open or within
+        // a fifth of their limits (MARGIN): a round for them, polished again, as long as the
+        // last one narrowed them (only then: a frame that closes with room to spare is the
+        // same)
+        if failing.is_empty() {
+            let excess = problem.weld_excess(&records);
+            if excess <= MARGIN || excess > (1.0 - WELD_PROGRESS) * weld_excess {
+                break;
+            }
+            weld_excess = excess;
+        } else {
+            weld_excess = Real::INFINITY;
         }
         rounds += 1;
         for (li, j) in failing {

@@ -841,12 +841,15 @@ impl Problem<'_> {
             .collect()
     }
 
-    /// Whether a weld of `records` (every link's joint, [`Problem::records`]) is outside
-    /// [`MARGIN`] of its limits (its plates apart or into each other): within its limits,
-    /// but so near them that another solve's round-off could take it past, counts as open.
-    pub(super) fn welds_open(&self, records: &[JointRecord]) -> bool {
-        let limits = self.options.limits.within(MARGIN);
-        (records.iter().enumerate()).any(|(li, j)| !self.bridges[li] && !limits.holds(j))
+    /// How far the worst weld of `records` (every link's joint, [`Problem::records`]) is
+    /// from its limits, as a multiple of them (its plates apart or into each other; 0
+    /// without welds). Beyond [`MARGIN`] it counts as open for the weld rounds: within its
+    /// limits, but so near them that another solve's round-off could take it past.
+    pub(super) fn weld_excess(&self, records: &[JointRecord]) -> Real {
+        (records.iter().enumerate())
+            .filter(|(li, _)| !self.bridges[*li])
+            .map(|(_, j)| self.options.limits.excess(j))
+            .fold(0.0, Real::max)
     }
 
     /// The links of `records` still bridges whose joints are outside a bridge's limits.
