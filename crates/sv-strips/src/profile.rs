@@ -138,7 +138,7 @@ fn slot(center: &[Point2], width: f64) -> Result<Polyline<f64>, StripsError> {
 
 /// Cut relief `r` as one with the hook slot it runs into: it must meet exactly one (one that
 /// met two would cut the web between them, a neck).
-fn cut_relief(slots: &mut [Polyline<f64>], r: &Relief) -> Result<(), String> {
+fn cut_relief(slots: &mut [Polyline<f64>], r: &Relief, corner: f64) -> Result<(), String> {
     let [a, b, c, d] = r.outline;
     let mut notch = Polyline::with_capacity(4, true);
     notch.add(a.x, a.y, 0.0);
@@ -148,6 +148,41 @@ fn cut_relief(slots: &mut [Polyline<f64>], r: &Relief) -> Result<(), String> {
     notch.add(d.x, d.y, -1.0);
     if notch.area() < 0.0 {
         notch.invert_direction_mut();
+    }
+    // a bent relief: its lead run round the leg's section, square behind it (the corners
+    // rounded as the slots'), round where it joins the run into the slot
+    if let Some([p, q]) = r.lead {
+        let half = r.width / 2.0;
+        let round = corner.min(half / 2.0);
+        let Some(along) = (q - p).try_normalize(1e-12) else {
+            return Err(format!(
+                "the relief for leg {} of unit {} has no lead",
+                r.leg, r.leg_of
+            ));
+        };
+        let left = Vector2::new(-along.y, along.x);
+        // counter-clockwise: back along its left side, round its square end, forward along
+        // its right side, round the front
+        let quarter = (std::f64::consts::PI / 8.0).tan();
+        let mut lead = Polyline::with_capacity(6, true);
+        for (at, bulge) in [
+            (q + left * half, 0.0),
+            (p + left * half + along * round, quarter),
+            (p + left * (half - round), 0.0),
+            (p - left * (half - round), quarter),
+            (p - left * half + along * round, 0.0),
+            (q - left * half, 1.0),
+        ] {
+            lead.add(at.x, at.y, bulge);
+        }
+        let mut joined = notch.boolean(&lead, BooleanOp::Or);
+        if joined.pos_plines.len() != 1 || !joined.neg_plines.is_empty() {
+            return Err(format!(
+                "the relief for leg {} of unit {} does not join its lead",
+                r.leg, r.leg_of
+            ));
+        }
+        notch = joined.pos_plines.remove(0).pline;
     }
     let mut met = None;
     for (i, s) in slots.iter().enumerate() {
@@ -215,7 +250,7 @@ fn unit_cuts(
         .map(|c| slot(c, p.slot_width))
         .collect::<Result<Vec<_>, _>>()?;
     for r in reliefs {
-        cut_relief(&mut slots, r).map_err(|why| unit_error(strip, unit, why))?;
+        cut_relief(&mut slots, r, p.fillet_radius).map_err(|why| unit_error(strip, unit, why))?;
     }
     let folds = (0..4)
         .flat_map(|j| [layout.hub_necks[j], layout.rim_necks[(j + 1) % 4]])
@@ -656,10 +691,11 @@ mod tests {
                 Point2::new(-5.0, 20.0),
             ],
             width: 10.0,
+            lead: None,
             leg_of: 1,
             leg: 2,
         };
-        cut_relief(&mut slots, &r).unwrap();
+        cut_relief(&mut slots, &r, 1.5).unwrap();
         let band = 10.0 * (20.0 - 2.0);
         let disc = std::f64::consts::PI * 25.0 / 2.0;
         let after = slots[0].area().abs();
@@ -668,6 +704,24 @@ mod tests {
             "{after} - {before}"
         );
         // clockwise, as every slot
+        assert!(slots[0].area() < 0.0);
+
+        // bent: a lead run from its square end at x = 20 to the closed end of the run into
+        // the slot, 10 across; it adds its band less what the run and its half disc
+        // already cut (a 5 x 5 square and a quarter disc) and its two rounded corners
+        let mut slots = vec![slot(&slot_path, 4.0).unwrap()];
+        let bent = Relief {
+            lead: Some([Point2::new(20.0, 20.0), Point2::new(0.0, 20.0)]),
+            ..r
+        };
+        cut_relief(&mut slots, &bent, 1.5).unwrap();
+        let corners = 2.0 * (1.5 * 1.5 - std::f64::consts::PI * 1.5 * 1.5 / 4.0);
+        let lead = 10.0 * 20.0 - 25.0 - disc / 2.0 - corners;
+        let after = slots[0].area().abs();
+        assert!(
+            (after - before - band - disc - lead).abs() < 0.05,
+            "{after} - {before}"
+        );
         assert!(slots[0].area() < 0.0);
     }
 }

@@ -28,6 +28,10 @@ pub const ROLLS_DEG: [Real; 5] = [-20.0, -10.0, 0.0, 10.0, 20.0];
 /// shortest that stays out from under the upper plate and clear of the necks and the other
 /// cuts is taken.
 const DIRECTIONS: usize = 180;
+/// A bent relief's lead run covers the leg's section and goes on up to this many steps of
+/// [`BEND_STEP`] (mm) before it turns.
+const BEND_RUNS: usize = 12;
+const BEND_STEP: Real = 3.0;
 /// Room between the leg's section and the relief's sides (mm).
 pub const CLEARANCE: Real = 1.0;
 
@@ -43,6 +47,12 @@ pub struct Relief {
     pub outline: [Point2; 4],
     /// Across (mm).
     pub width: Real,
+    /// Where no straight notch keeps the rules, the relief bends once: it starts with a
+    /// run round the leg's section from `lead[0]` to `lead[1]` (its centre line, `width`
+    /// across; square at `lead[0]`, [`CLEARANCE`] behind the section, its corners rounded
+    /// as the slots'), and `outline` runs on from `lead[1]`, the centre of its closed end,
+    /// to the slot. `None` for a straight relief.
+    pub lead: Option<[Point2; 2]>,
     /// The unit whose leg passes through.
     pub leg_of: usize,
     /// Which of its legs.
@@ -102,7 +112,7 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
                 let existing = &strips[si].reliefs[j];
                 // where no notch can clear the leg, none is cut: the fold check names the
                 // leg that runs through the plate there
-                let Some((outline, width)) =
+                let Some((outline, width, lead)) =
                     relief_for(&convex_hull(&sections), pf, pg, &widths, min_web, existing)
                 else {
                     continue;
@@ -110,6 +120,7 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
                 strips[si].reliefs[j].push(Relief {
                     outline,
                     width,
+                    lead,
                     leg_of: f,
                     leg: k,
                 });
@@ -119,9 +130,115 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
     Ok(())
 }
 
-/// The outline and width of the relief of `section` (the leg's section, flat, in `lower`'s
-/// frame) out to `lower`'s hook slots beside `upper`'s hub plate ([`Relief`]); `None`
-/// where no direction keeps to the rules.
+/// A relief as the search tries it: the run that opens into the slot (`outline`, as
+/// [`Relief::outline`], its closed end round about the middle of `outline[3]` and
+/// `outline[0]`), `half` its half width, and the lead run before a bend ([`Relief::lead`]).
+struct Notch {
+    outline: [Point2; 4],
+    half: Real,
+    lead: Option<[Point2; 2]>,
+}
+
+impl Notch {
+    /// The centre of the open run's closed end.
+    fn back(&self) -> Point2 {
+        Point2::from((self.outline[0].coords + self.outline[3].coords) / 2.0)
+    }
+
+    /// The centre of its open end, in the slot.
+    fn end(&self) -> Point2 {
+        Point2::from((self.outline[1].coords + self.outline[2].coords) / 2.0)
+    }
+
+    /// Its length along its centre line.
+    fn length(&self) -> Real {
+        let lead = self.lead.map_or(0.0, |[p, q]| (q - p).norm());
+        lead + (self.end() - self.back()).norm()
+    }
+
+    /// The distance from the segment `p q` to the notch.
+    fn apart(&self, p: &Point2, q: &Point2) -> Real {
+        let open = relief_apart(&self.back(), self.half, &self.outline, p, q);
+        open.min(self.lead_apart(p, q))
+    }
+
+    /// The lead run's band (its square end's corners not rounded), or nothing.
+    fn lead_band(&self) -> Option<[Point2; 4]> {
+        let [a, b] = self.lead?;
+        let along = (b - a).try_normalize(1e-12)?;
+        let left = Vector2::new(-along.y, along.x) * self.half;
+        Some([b + left, a + left, a - left, b - left])
+    }
+
+    /// The distance from the segment `p q` to the lead run's band (infinite without one;
+    /// its round end is the open run's closed end).
+    fn lead_apart(&self, p: &Point2, q: &Point2) -> Real {
+        let a2 = |x: &Point2| [x.x, x.y];
+        self.lead_band().map_or(Real::INFINITY, |band| {
+            (0..4)
+                .map(|i| segment_distance(a2(&band[i]), a2(&band[(i + 1) % 4]), a2(p), a2(q)))
+                .fold(Real::INFINITY, Real::min)
+        })
+    }
+
+    /// The straight bands it is made of, clockwise or counter-clockwise.
+    fn bands(&self) -> Vec<Vec<Point2>> {
+        let mut bands = vec![self.outline.to_vec()];
+        bands.extend(self.lead_band().map(|b| b.to_vec()));
+        bands
+    }
+}
+
+impl Relief {
+    fn notch(&self) -> Notch {
+        Notch {
+            outline: self.outline,
+            half: self.width / 2.0,
+            lead: self.lead,
+        }
+    }
+}
+
+/// What a relief must keep clear of in one lower hub plate.
+struct Rules<'a> {
+    /// The upper hub plate's outline, counter-clockwise, in the lower plate's frame.
+    upper_ccw: &'a [Point2],
+    lower: &'a Placed,
+    widths: &'a CutWidths,
+    min_web: Real,
+    existing: &'a [Relief],
+    /// The centre line of the hook slots round the hub (the open run ends on it).
+    track: [Point2; 4],
+}
+
+impl Rules<'_> {
+    /// The run along `dir` whose centre line passes `mid` to the left of `origin`, `half`
+    /// either side, from `base` out to the slot's centre line (its sides must both leave
+    /// the track further than `beyond` from `origin`).
+    fn run(
+        &self,
+        [origin, base]: [Point2; 2],
+        mid: Real,
+        dir: Vector2,
+        half: Real,
+        beyond: Real,
+    ) -> Option<[Point2; 4]> {
+        let left = Vector2::new(-dir.y, dir.x);
+        let side = |w: Real| {
+            let p = origin + left * (mid + w);
+            leaves(&self.track, &p, &dir)
+                .filter(|&t| t > beyond)
+                .map(|t| p + dir * t)
+        };
+        let (b, c) = (side(half)?, side(-half)?);
+        Some([base + left * half, b, c, base - left * half])
+    }
+}
+
+/// The relief of `section` (the leg's section, flat, in `lower`'s frame) out to `lower`'s
+/// hook slots beside `upper`'s hub plate ([`Relief`]): its outline, width and lead run;
+/// `None` where no notch keeps to the rules. A straight notch where one does, the
+/// shortest; else one bent once, the shortest of those.
 fn relief_for(
     section: &[Point2],
     upper: &Placed,
@@ -129,7 +246,7 @@ fn relief_for(
     widths: &CutWidths,
     min_web: Real,
     existing: &[Relief],
-) -> Option<([Point2; 4], Real)> {
+) -> Option<([Point2; 4], Real, Option<[Point2; 2]>)> {
     let inverse = lower.hub.inverse();
     let up: Vec<Point2> = upper
         .hub_plate
@@ -160,62 +277,97 @@ fn relief_for(
     if away.dot(&(centre - up_centre)) < 0.0 {
         away = -away;
     }
-    // the sides run to the centre line of the hook slots round the hub
-    let track = sv_unit::inset(&lower.layout.hub, -widths.slot / 2.0)?;
-    let mut best: Option<(Real, [Point2; 4], Real)> = None;
-    for step in 0..DIRECTIONS {
+    let direction = |step: usize| {
         let turn = std::f64::consts::TAU * step as Real / DIRECTIONS as Real;
-        let dir = along * turn.cos() + away * turn.sin();
+        along * turn.cos() + away * turn.sin()
+    };
+    let rules = Rules {
+        upper_ccw: &upper_ccw,
+        lower,
+        widths,
+        min_web,
+        existing,
+        track: sv_unit::inset(&lower.layout.hub, -widths.slot / 2.0)?,
+    };
+    // the run round the section along `dir`: the offset of its centre line, its base (the
+    // centre of its closed end), its half width, and how far along it the section reaches
+    let round_section = |dir: &Vector2| {
         let left = Vector2::new(-dir.y, dir.x);
         let (w0, w1) = extent(section, &centre, &left);
-        let half = (w1 - w0) / 2.0 + CLEARANCE;
+        let (t0, t1) = extent(section, &centre, dir);
         let mid = (w0 + w1) / 2.0;
-        let (t0, t1) = extent(section, &centre, &dir);
-        let side = |w: Real| {
-            let p = centre + left * (mid + w);
-            leaves(&track, &p, &dir)
-                .filter(|&t| t > t1)
-                .map(|t| p + dir * t)
-        };
-        let (Some(b), Some(c)) = (side(half), side(-half)) else {
-            continue;
-        };
-        let base = centre + left * mid + dir * t0;
-        let outline = [base + left * half, b, c, base - left * half];
-        let length = (Point2::from((b.coords + c.coords) / 2.0) - base).norm();
-        if best.is_some_and(|(l, _, _)| l <= length) {
-            continue;
+        (
+            mid,
+            centre + left * mid + dir * t0,
+            (w1 - w0) / 2.0 + CLEARANCE,
+            t1,
+        )
+    };
+    let mut best: Option<Notch> = None;
+    let keep = |notch: Notch, best: &mut Option<Notch>| {
+        if best.as_ref().is_none_or(|b| notch.length() < b.length()) && fits(&notch, &rules) {
+            *best = Some(notch);
         }
-        if fits(&outline, half, &upper_ccw, lower, widths, min_web, existing) {
-            best = Some((length, outline, 2.0 * half));
+    };
+    for step in 0..DIRECTIONS {
+        let dir = direction(step);
+        let (mid, base, half, reach) = round_section(&dir);
+        if let Some(outline) = rules.run([centre, base], mid, dir, half, reach) {
+            keep(
+                Notch {
+                    outline,
+                    half,
+                    lead: None,
+                },
+                &mut best,
+            );
         }
     }
-    best.map(|(_, outline, width)| (outline, width))
+    if best.is_none() {
+        // bent once: a lead run round the section, as long as it covers it and up to
+        // BEND_RUNS steps longer, then on from its end in any direction
+        for step in 0..DIRECTIONS {
+            let dir = direction(step);
+            let (mid, base, half, reach) = round_section(&dir);
+            let left = Vector2::new(-dir.y, dir.x);
+            // square behind the section
+            let back = base - dir * CLEARANCE;
+            for k in 0..BEND_RUNS {
+                let elbow = centre + left * mid + dir * (reach + k as Real * BEND_STEP);
+                for turn in 0..DIRECTIONS {
+                    let run = rules.run([elbow, elbow], 0.0, direction(turn), half, 0.0);
+                    if let Some(outline) = run {
+                        keep(
+                            Notch {
+                                outline,
+                                half,
+                                lead: Some([back, elbow]),
+                            },
+                            &mut best,
+                        );
+                    }
+                }
+            }
+        }
+    }
+    best.map(|b| (b.outline, 2.0 * b.half, b.lead))
 }
 
-/// Whether the relief `outline` (half width `half`) keeps the rules: not under the upper
-/// plate; both its sides end on the straight run of one hook slot; a web of `min_web` to
-/// every other stretch of slot and to the reliefs `existing`; the neck finder's radius
-/// from every hub neck.
-fn fits(
-    outline: &[Point2; 4],
-    half: Real,
-    upper_ccw: &[Point2],
-    lower: &Placed,
-    widths: &CutWidths,
-    min_web: Real,
-    existing: &[Relief],
-) -> bool {
-    let [a, b, c, d] = *outline;
-    let base = Point2::from((a.coords + d.coords) / 2.0);
-    let end = Point2::from((b.coords + c.coords) / 2.0);
-    let mut band = outline.to_vec();
-    if area(&band) < 0.0 {
-        band.reverse();
+/// Whether `notch` keeps the rules: not under the upper plate; the open run's sides both
+/// end on the straight run of one hook slot; a web of `min_web` to every other stretch of
+/// slot and to the reliefs already cut; the neck finder's radius from every hub neck.
+fn fits(notch: &Notch, rules: &Rules) -> bool {
+    for band in notch.bands() {
+        let mut band = band;
+        if area(&band) < 0.0 {
+            band.reverse();
+        }
+        if area(&clip_convex(&band, rules.upper_ccw)).abs() > 1.0 {
+            return false;
+        }
     }
-    if area(&clip_convex(&band, upper_ccw)).abs() > 1.0 {
-        return false;
-    }
+    let [_, b, c, _] = notch.outline;
+    let (widths, lower) = (rules.widths, rules.lower);
     let mut runs = 0;
     for path in &lower.layout.slot_paths {
         for (i, w) in path.windows(2).enumerate() {
@@ -227,30 +379,43 @@ fn fits(
                 && [b, c]
                     .iter()
                     .all(|p| off(p) < 1e-6 && at(p) > room && at(p) < 1.0 - room);
+            let web = widths.slot / 2.0 + rules.min_web;
             if ends_here {
                 runs += 1;
-            } else if relief_apart(&base, half, outline, &w[0], &w[1]) < widths.slot / 2.0 + min_web
-            {
+                // the lead keeps its web from the slot the notch opens into, too
+                if notch.lead_apart(&w[0], &w[1]) < web {
+                    return false;
+                }
+            } else if notch.apart(&w[0], &w[1]) < web {
                 return false;
             }
         }
     }
     let apart_from = |r: &Relief| {
-        let [a0, b0, c0, d0] = r.outline;
-        let back = Point2::from((a0.coords + d0.coords) / 2.0);
-        [(a0, b0), (b0, c0), (c0, d0)]
-            .iter()
-            .map(|(p, q)| relief_apart(&base, half, outline, p, q))
-            .fold(
-                relief_apart(&base, half, outline, &back, &back) - r.width / 2.0,
-                Real::min,
-            )
+        let other = r.notch();
+        let [a0, b0, c0, d0] = other.outline;
+        let back = other.back();
+        let mut d = notch.apart(&back, &back) - other.half;
+        for (p, q) in [(a0, b0), (b0, c0), (c0, d0)] {
+            d = d.min(notch.apart(&p, &q));
+        }
+        if let Some(band) = other.lead_band() {
+            for i in 0..4 {
+                d = d.min(notch.apart(&band[i], &band[(i + 1) % 4]));
+            }
+        }
+        d
     };
     runs == 1
-        && existing.iter().all(|r| apart_from(r) >= min_web)
+        && rules
+            .existing
+            .iter()
+            .all(|r| apart_from(r) >= rules.min_web)
         && lower.layout.pins().hub.iter().all(|p| {
-            point_segment_distance([p.x, p.y], [base.x, base.y], [end.x, end.y]) - half
+            let [s, e] = [notch.back(), notch.end()];
+            point_segment_distance([p.x, p.y], [s.x, s.y], [e.x, e.y]) - notch.half
                 > neck_room(widths)
+                && notch.lead_apart(p, p) > neck_room(widths)
         })
 }
 
