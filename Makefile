@@ -4,7 +4,7 @@ CARGO ?= cargo
 
 export PROPTEST_RNG_SEED ?= 20261122
 
-.PHONY: test toolchain browser xr-deps fmt-check clippy unit-tests bench bench-primary fixtures bench-stream
+.PHONY: acceptance test toolchain browser xr-deps fmt-check clippy unit-tests bench bench-primary fixtures bench-stream
 
 ## Everything CI checks: formatting, lints (warnings denied), unit, integration, e2e and doc tests.
 test: toolchain browser xr-deps fmt-check clippy unit-tests
@@ -45,6 +45,11 @@ clippy:
 
 unit-tests:
 	$(CARGO) test --workspace
+
+## Issue 14's acceptance at 200 mm on all five targets (about ten minutes on 2 cores; `make
+## test` runs the saddle's).
+acceptance:
+	$(CARGO) test --workspace --test e2e -- --ignored at_200_mm_every_target
 
 ## Criterion benchmarks of every crate that has them (figures go to docs/).
 bench: bench-primary

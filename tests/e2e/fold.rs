@@ -262,38 +262,55 @@ fn the_dome_the_vault_the_saddle_and_a_hypar_fold_from_their_dxf_too() {
     }
 }
 
-/// Issue 14's acceptance at 200 mm with the sheet the build picks for that size (1.5 mm at
-/// its least widths), on the saddle (the target that takes the most rounds at 300 mm): by our
-/// own fold code every leg within 0.5 mm, every hub lap at least 25 mm, every bridge and
-/// weld within its limits, no plate or leg into another; `check` agrees, and passes. (One
-/// strip direction, the one the build keeps when it tries both, to keep the test short;
-/// the other targets at 200 mm: docs/geometry.md 6.9.)
+/// Issue 14's acceptance at 200 mm ([`holds_at_200_mm`]) on the saddle, the target that
+/// takes the most rounds at 300 mm, in one strip direction (the one the build keeps when
+/// it tries both) to keep the test short; every target, both directions: below.
 #[test]
 fn at_200_mm_the_saddle_folds_and_closes_every_joint() {
-    let dir = Dir::new();
-    let mut args = vec![
-        "build",
-        "--target",
+    holds_at_200_mm(
         "builtin:saddle",
-        "--unit-size",
-        "200",
-        "--strip-direction",
-        "v",
-        "--quiet",
-    ];
-    args.extend(crate::build::NEST_WORK);
-    let built = dir.run(&args);
-    built.expect_code(0);
+        &["--target", "builtin:saddle", "--strip-direction", "v"],
+    );
+}
+
+/// Issue 14's acceptance at 200 mm on every target it names, with the parameters the build
+/// picks for that size (1.5 mm sheet at its least widths), both strip directions tried as
+/// by default. About ten minutes on two cores, so `make test` runs only the saddle's
+/// (above) and this one runs with `make acceptance`.
+#[test]
+#[ignore = "ten minutes: make acceptance"]
+fn at_200_mm_every_target_folds_and_closes_every_joint() {
+    let hypar = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/targets/hypar_square.obj"
+    );
+    holds_at_200_mm("pavilion", &[]);
+    for target in ["builtin:dome", "builtin:vault", hypar, "builtin:saddle"] {
+        holds_at_200_mm(target, &["--target", target]);
+    }
+}
+
+/// `spinvalence build --unit-size 200` with `args`: the 1.5 mm sheet at its least widths,
+/// and by our own fold code every leg within 0.5 mm, every hub lap at least 25 mm and as
+/// reported, every joint within its limits, no plate or leg into another; `check` agrees
+/// and passes.
+fn holds_at_200_mm(what: &str, args: &[&str]) {
+    let dir = Dir::new();
+    let mut all = vec!["build", "--unit-size", "200", "--quiet"];
+    all.extend(args);
+    all.extend(crate::build::NEST_WORK);
+    dir.run(&all).expect_code(0);
     let frame = read_json(&dir.join("out/frame.json"));
-    assert_eq!(frame["params"]["thickness"], 1.5, "{}", frame["params"]);
+    let params = &frame["params"];
+    assert_eq!(params["thickness"], 1.5, "{what}: {params}");
     let units = frame["units"].as_array().unwrap().len();
     let (code, stdout, fig) = fold_check(&dir);
-    assert_eq!(code, 0, "{stdout}");
-    assert_eq!(fig["legs_checked"], 4 * units, "{fig}");
-    assert!(f(&fig, "leg_error_max") <= 0.5, "{fig}");
-    assert!(f(&fig, "lap_min") >= 25.0, "{fig}");
-    assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{fig}");
-    joints_hold("saddle at 200 mm", &fig);
+    assert_eq!(code, 0, "{what}: {stdout}");
+    assert_eq!(fig["legs_checked"], 4 * units, "{what}: {fig}");
+    assert!(f(&fig, "leg_error_max") <= 0.5, "{what}: {fig}");
+    assert!(f(&fig, "lap_min") >= 25.0, "{what}: {fig}");
+    assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{what}: {fig}");
+    joints_hold(what, &fig);
     let checked = dir.run(&["check", "out"]);
     agrees_with_check(&checked, &fig);
     checked.expect_code(0);

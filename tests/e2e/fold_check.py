@@ -1247,6 +1247,12 @@ def main(argv=None):
                     legs_into_rims += 1
     print("legs into a neighbour's rim: %d, deepest %.3g mm (%s)"
           % (legs_into_rims, leg_rim[0], leg_rim[1]))
+    # a leg through steel fails the check as a collision of plates does
+    for name, n in (("legs through a neighbour's hub plate outside its relief", legs_through),
+                    ("legs into a neighbour's rim", legs_into_rims)):
+        if n:
+            ok = False
+            print("FAIL %s: %d" % (name, n))
     for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
                       ("hub lap", lap_fail), ("lap claim", claim_fail), ("bridge", bridge_fail),
                       ("weld", weld_fail), ("plates into each other", reach_fail),
