@@ -173,10 +173,9 @@ impl Notch {
     /// The distance from the segment `p q` to the lead run's band (infinite without one;
     /// its round end is the open run's closed end).
     fn lead_apart(&self, p: &Point2, q: &Point2) -> Real {
-        let a2 = |x: &Point2| [x.x, x.y];
         self.lead_band().map_or(Real::INFINITY, |band| {
             (0..4)
-                .map(|i| segment_distance(a2(&band[i]), a2(&band[(i + 1) % 4]), a2(p), a2(q)))
+                .map(|i| segment_distance(xy(&band[i]), xy(&band[(i + 1) % 4]), xy(p), xy(q)))
                 .fold(Real::INFINITY, Real::min)
         })
     }
@@ -413,8 +412,7 @@ fn fits(notch: &Notch, rules: &Rules) -> bool {
             .all(|r| apart_from(r) >= rules.min_web)
         && lower.layout.pins().hub.iter().all(|p| {
             let [s, e] = [notch.back(), notch.end()];
-            point_segment_distance([p.x, p.y], [s.x, s.y], [e.x, e.y]) - notch.half
-                > neck_room(widths)
+            point_segment_distance(xy(p), xy(&s), xy(&e)) - notch.half > neck_room(widths)
                 && notch.lead_apart(p, p) > neck_room(widths)
         })
 }
@@ -436,16 +434,20 @@ pub(crate) fn neck_room(widths: &CutWidths) -> Real {
 /// The distance from the segment `p q` to a relief: its sides and open end `band` (A, B,
 /// C, D) and the half disc of radius `half` round `back`.
 fn relief_apart(back: &Point2, half: Real, band: &[Point2; 4], p: &Point2, q: &Point2) -> Real {
-    let a2 = |x: &Point2| [x.x, x.y];
     let [a, b, c, d] = band;
     [(a, b), (b, c), (c, d)]
         .iter()
-        .map(|(u, v)| segment_distance(a2(u), a2(v), a2(p), a2(q)))
+        .map(|(u, v)| segment_distance(xy(u), xy(v), xy(p), xy(q)))
         .fold(
-            point_segment_distance(a2(back), a2(p), a2(q)) - half,
+            point_segment_distance(xy(back), xy(p), xy(q)) - half,
             Real::min,
         )
         .max(0.0)
+}
+
+/// A point as `sv_geom::planar` takes it.
+fn xy(p: &Point2) -> [Real; 2] {
+    [p.x, p.y]
 }
 
 /// The least and largest of `(p - o) . d` over `pts`.
