@@ -431,6 +431,10 @@ fn frame_overlap_is_read_or_refused_in_one_line_before_anything_is_written() {
         "[frame]\noverlap = 10.0\n",
         "[frame]\noverlap = -30\n",
         "[frame]\noverlap = \"constant\"\n[joints]\nclose = false\n",
+        // the band must be a length, and reach no lower than the weld minimum (25 mm)
+        "[frame]\noverlap = \"constant\"\noverlap_tolerance = 0\n",
+        "[frame]\noverlap = \"constant\"\noverlap_tolerance = nan\n",
+        "[frame]\noverlap = 25.5\n",
     ] {
         dir.write("bad.toml", toml);
         let out = dir.run(&["build", "--config", "bad.toml", "--out", "bad"]);

@@ -482,3 +482,44 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
     );
     assert!(!dir.join("small").exists());
 }
+
+/// With one hub lap asked of every link (`params.hub_lap`, `[frame] overlap = "constant"`),
+/// both checks hold every lap as cut to it: our fold check measures the laps in the DXFs
+/// and `spinvalence check DIR` must agree with it on the farthest lap, passing a band that
+/// holds every lap and failing one 1 mm too narrow.
+#[test]
+fn a_lap_asked_of_every_link_is_held_by_both_checks() {
+    let dir = copy_of_default_build();
+    let (code, stdout, fig) = fold_check(&dir);
+    assert_eq!(code, 0, "{stdout}");
+    assert!(fig["lap_off_one_length_max"].is_null(), "{fig}");
+    let (lo, hi) = (f(&fig, "lap_min"), f(&fig, "lap_max"));
+    let mid = (lo + hi) / 2.0;
+    let path = dir.join("out/frame.json");
+    let frame: Value = read_json(&path);
+    for (tolerance, holds) in [(hi - mid + 0.5, true), (hi - mid - 1.0, false)] {
+        let mut asked = frame.clone();
+        asked["params"]["hub_lap"] = serde_json::json!({"length": mid, "tolerance": tolerance});
+        fs::write(&path, serde_json::to_string_pretty(&asked).unwrap()).unwrap();
+        let (code, stdout, fig) = fold_check(&dir);
+        assert_eq!(code == 0, holds, "tolerance {tolerance}: {stdout}");
+        let farthest = f(&fig, "lap_off_one_length_max");
+        assert!(
+            (farthest - (hi - mid)).abs() < 1e-6,
+            "{farthest} vs {}",
+            hi - mid
+        );
+        let checked = dir.run(&["check", "out"]);
+        checked.expect_code(if holds { 0 } else { 1 });
+        let text = row(&checked, "hub lap off the one lap asked");
+        let worst: f64 = text
+            .split_whitespace()
+            .find_map(|w| w.parse().ok())
+            .unwrap_or_else(|| panic!("no figure in {text}"));
+        assert!(
+            (worst - farthest).abs() < 0.01,
+            "check {worst}, ours {farthest}: {text}"
+        );
+        assert_eq!(text.ends_with("FAIL"), !holds, "{text}");
+    }
+}

@@ -1020,6 +1020,10 @@ def main(argv=None):
     lap_max = -float("inf")
     lap_claim = (0.0, None)
     lap_fail, claim_fail = [], []
+    # one lap asked for every link (params.hub_lap): every lap within its tolerance of it
+    one_lap_goal = frame["params"].get("hub_lap")
+    one_lap = (0.0, None)
+    one_lap_fail = []
     stack_lift = (0.0, None)  # hub plates at a lap: how far from one lying on the other
     stack_gap = (0.0, None)   # ... and the widest gap between them over the lap
     stack_fail = []
@@ -1084,6 +1088,12 @@ def main(argv=None):
         lap_max = max(lap_max, lap)
         if lap < a.min_overlap:
             lap_fail.append(where)
+        if one_lap_goal:
+            off = abs(lap - float(one_lap_goal["length"]))
+            if one_lap[1] is None or off > one_lap[0]:
+                one_lap = (off, where)
+            if not off <= float(one_lap_goal["tolerance"]):
+                one_lap_fail.append(where)
         ce = abs(lap - float(lk.get("hub_overlap", float("nan"))))
         if not ce <= LAP_CLAIM_TOL:
             claim_fail.append(where)
@@ -1176,6 +1186,9 @@ def main(argv=None):
         not pin_fail and legs_checked > 0)
     row("hub lap min (mm)", "%.3f" % lap_min[0], ">= %g" % a.min_overlap, lap_min[1] or "-",
         not lap_fail and laps_checked > 0)
+    if one_lap_goal:
+        row("hub lap off the one lap asked (mm)", "%.3f" % one_lap[0],
+            "<= %g" % float(one_lap_goal["tolerance"]), one_lap[1] or "-", not one_lap_fail)
     row("hub lap vs claim (mm)", "%.3g" % lap_claim[0], "<= %g" % LAP_CLAIM_TOL, lap_claim[1] or "-",
         not claim_fail and laps_checked > 0)
     row("bridge span, folded - flat (mm)", "%.3g" % span_w[1], "<= %g" % BRIDGE_TOL, span_w[0] or "-",
@@ -1254,7 +1267,8 @@ def main(argv=None):
             ok = False
             print("FAIL %s: %d" % (name, n))
     for name, lst in (("leg length", leg_fail), ("pin offset", pin_fail),
-                      ("hub lap", lap_fail), ("lap claim", claim_fail), ("bridge", bridge_fail),
+                      ("hub lap", lap_fail), ("lap claim", claim_fail),
+                      ("hub lap off the one lap asked", one_lap_fail), ("bridge", bridge_fail),
                       ("weld", weld_fail), ("plates into each other", reach_fail),
                       ("plates across a bridge's slot", rim_fail),
                       ("hub plates into each other", stack_fail)):
@@ -1272,6 +1286,7 @@ def main(argv=None):
             "lap_min": lap_min[0] if laps_checked else None,
             "lap_max": lap_max if laps_checked else None,
             "lap_claim_error_max": lap_claim[0],
+            "lap_off_one_length_max": one_lap[0] if one_lap_goal else None,
             "hub_plate_offset_max": plate_dev[0],
             "leg_error_tool_pins_max": tool_leg_err,
             "leg_length_claim_error_max": tool_len_err,
@@ -1299,6 +1314,7 @@ def main(argv=None):
             "leg_into_rim_max": leg_rim[0],
             "problems": ["%s: %s: %s" % p for p in struct],
             "failing": {"leg": leg_fail, "pin": pin_fail, "lap": lap_fail, "lap_claim": claim_fail,
+                        "one_lap": one_lap_fail,
                         "bridge": bridge_fail, "weld": weld_fail, "reach": reach_fail,
                         "bridge_reach": rim_fail,
                         "hub_stack": stack_fail},

@@ -627,15 +627,12 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     written.insert(0, strips_path.join(""));
 
     if !args.quiet {
-        let overlaps = &solved.evaluation.overlaps;
-        let min = overlaps.iter().copied().fold(f64::INFINITY, f64::min);
-        let max = overlaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let mut rows = summary_rows(
             &cfg,
             &report,
             &options.sheet,
             &solved.report,
-            (min, max),
+            &hub_overlap_text(&frame),
             &timings,
         );
         if let Some(j) = &joints {
@@ -929,12 +926,53 @@ fn finish(bar: &ProgressBar) {
     bar.finish_and_clear();
 }
 
+/// The summary's hub laps: their range, and with one lap asked for every link
+/// (`params.hub_lap`) whether every lap is within its tolerance, else how many are not and
+/// the farthest three.
+fn hub_overlap_text(frame: &sv_frame::FrameFile) -> String {
+    let laps = frame.links.iter().map(|l| l.hub_overlap);
+    let min = laps.clone().fold(f64::INFINITY, f64::min);
+    let max = laps.fold(f64::NEG_INFINITY, f64::max);
+    let mm = |x: f64| format!("{} mm", number(x));
+    let mut text = format!("{} .. {} (spread {})", mm(min), mm(max), mm(max - min));
+    let Some(goal) = frame.params.hub_lap else {
+        return text;
+    };
+    let mut off: Vec<(f64, String)> = frame
+        .links
+        .iter()
+        .map(|l| (l.hub_overlap - goal.length, link_name(frame, l.units)))
+        .filter(|(d, _)| d.is_nan() || d.abs() > goal.tolerance)
+        .collect();
+    off.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+    let asked = format!("{} +- {}", number(goal.length), mm(goal.tolerance));
+    if off.is_empty() {
+        text.push_str(&format!(
+            "; every lap within {asked}: one gauge block checks them all"
+        ));
+    } else {
+        let worst: Vec<String> = off
+            .iter()
+            .take(3)
+            .map(|(d, name)| format!("{name} {:+.2} mm", d))
+            .collect();
+        text.push_str(&format!(
+            "; {} of {} laps outside {asked} ({}): a wider [frame] overlap_tolerance or a \
+             larger unit size may bring them in",
+            off.len(),
+            frame.links.len(),
+            worst.join(", ")
+        ));
+    }
+    text
+}
+
 fn summary_rows(
     cfg: &BuildConfig,
     s: &SecondaryReport,
     sheet: &str,
     p: &sv_frame::SolveReport,
-    overlap: (f64, f64),
+    overlap: &str,
     t: &Timings,
 ) -> Vec<Vec<String>> {
     let mm = |x: f64| format!("{} mm", number(x));
@@ -981,15 +1019,7 @@ fn summary_rows(
             "gap sum".into(),
             format!("{} -> {}", mm(p.gap_sum_start), mm(p.gap_sum)),
         ],
-        [
-            "hub overlap".into(),
-            format!(
-                "{} .. {} (spread {})",
-                mm(overlap.0),
-                mm(overlap.1),
-                mm(overlap.1 - overlap.0)
-            ),
-        ],
+        ["hub overlap".into(), overlap.into()],
         [
             "time secondary / primary / joints / strips / nest / report".into(),
             format!(

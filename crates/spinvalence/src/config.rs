@@ -41,7 +41,7 @@ use std::path::PathBuf;
 
 use anyhow::{anyhow, bail, Result};
 use serde::{Deserialize, Serialize};
-use sv_frame::{SidePolicy, SolveOptions};
+use sv_frame::{LapGoal, SidePolicy, SolveOptions};
 use sv_strips::{ProfileParams, StripOptions};
 use sv_surface::SecondaryOptions;
 
@@ -233,12 +233,15 @@ pub struct FrameConfig {
     /// for every link, the primary solve's median lap or the weld minimum, whichever is
     /// longer: one gauge block checks every hub joint on site) or that length in mm.
     pub overlap: Overlap,
+    /// How far a hub lap may be from that one length, either way (mm).
+    pub overlap_tolerance: f64,
 }
 
 impl Default for FrameConfig {
     fn default() -> Self {
         Self {
             overlap: Overlap::Rule(OverlapRule::Free),
+            overlap_tolerance: 1.0,
         }
     }
 }
@@ -287,23 +290,31 @@ pub enum OverlapRule {
 }
 
 impl FrameConfig {
-    /// The one hub lap every link must have (mm), if any: `laps` are the primary solve's.
-    /// Errors when a length below the weld minimum or not a length is asked for.
-    pub fn overlap_target(&self, laps: &[f64], min_overlap: f64) -> Result<Option<f64>> {
-        match self.overlap {
-            Overlap::Rule(OverlapRule::Free) => Ok(None),
+    /// The one hub lap every link must have, if any: `laps` are the primary solve's. Errors
+    /// when the tolerance is not a positive length or the band reaches below the weld minimum.
+    pub fn overlap_target(&self, laps: &[f64], min_overlap: f64) -> Result<Option<LapGoal>> {
+        let tolerance = self.overlap_tolerance;
+        if !(tolerance.is_finite() && tolerance > 0.0) {
+            bail!(
+                "frame: parameter overlap_tolerance = {tolerance}: expected a length in mm above 0"
+            );
+        }
+        let lowest = min_overlap + tolerance;
+        let length = match self.overlap {
+            Overlap::Rule(OverlapRule::Free) => return Ok(None),
             Overlap::Rule(OverlapRule::Constant) => {
                 let mut sorted: Vec<f64> = laps.iter().copied().filter(|v| v.is_finite()).collect();
                 sorted.sort_by(f64::total_cmp);
-                let median = sorted.get(sorted.len() / 2).copied().unwrap_or(min_overlap);
-                Ok(Some(median.max(min_overlap + 1.0)))
+                let median = sorted.get(sorted.len() / 2).copied().unwrap_or(lowest);
+                median.max(lowest)
             }
-            Overlap::Length(mm) if mm.is_finite() && mm >= min_overlap => Ok(Some(mm)),
+            Overlap::Length(mm) if mm.is_finite() && mm >= lowest => mm,
             Overlap::Length(mm) => bail!(
                 "frame: parameter overlap = {mm}: a hub lap must be a length of at least the \
-                 weld minimum {min_overlap} mm"
+                 weld minimum {min_overlap} mm plus overlap_tolerance {tolerance} mm"
             ),
-        }
+        };
+        Ok(Some(LapGoal { length, tolerance }))
     }
 }
 

@@ -49,6 +49,20 @@ pub struct FrameParams {
     /// What the joints must reach (extra field, with `links[].joint`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint_limits: Option<JointLimits>,
+    /// One hub lap for every link, held by the joint solve (extra field, `[frame] overlap`
+    /// constant or a length; absent where the laps are free).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hub_lap: Option<LapGoal>,
+}
+
+/// One hub lap for every link, so that one gauge block checks every hub joint on site:
+/// `length` within `tolerance` either way (mm, on the hub plates as cut).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LapGoal {
+    /// The one lap.
+    pub length: f64,
+    /// How far a lap may be from it, either way.
+    pub tolerance: f64,
 }
 
 /// What the joints between primary plates must reach, measured on the plates as cut

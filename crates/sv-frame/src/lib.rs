@@ -30,8 +30,8 @@ pub use check::{
 };
 pub use error::{FrameError, MeshError};
 pub use file::{
-    FrameFile, FrameParams, JointKind, JointLimits, JointMeasure, JointRecord, LegPins, LinkRecord,
-    MeshData, SolveSummary, UnitRecord, FRAME_FORMAT, FRAME_VERSION,
+    FrameFile, FrameParams, JointKind, JointLimits, JointMeasure, JointRecord, LapGoal, LegPins,
+    LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT, FRAME_VERSION,
 };
 pub use hub::{hubs_from_mesh, Hub};
 pub use joint::{

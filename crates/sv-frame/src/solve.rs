@@ -23,8 +23,8 @@ use sv_geom::{segment_closest, Point3, Real, Vector3};
 use sv_unit::{AxisCase, CutWidths, Deployment, Side};
 
 use crate::file::{
-    FrameParams, JointLimits, JointRecord, LegPins, LinkRecord, MeshData, SolveSummary, UnitRecord,
-    FRAME_FORMAT, FRAME_VERSION,
+    FrameParams, JointLimits, JointRecord, LapGoal, LegPins, LinkRecord, MeshData, SolveSummary,
+    UnitRecord, FRAME_FORMAT, FRAME_VERSION,
 };
 use crate::{
     hubs_from_mesh, FrameError, FrameFile, FrameUnits, Hub, Link, MeshChecks, QuadMesh, UnitPose,
@@ -165,6 +165,8 @@ pub struct Joints {
     pub thickness: Real,
     /// What they were to reach.
     pub limits: JointLimits,
+    /// The one hub lap they were to hold, if any.
+    pub hub_lap: Option<LapGoal>,
 }
 
 /// A solved frame.
@@ -1111,6 +1113,7 @@ impl Solved {
                 cut: self.options.cut,
                 thickness: self.joints.as_ref().map(|j| j.thickness),
                 joint_limits: self.joints.as_ref().map(|j| j.limits),
+                hub_lap: self.joints.as_ref().and_then(|j| j.hub_lap),
             },
             mesh: MeshData {
                 vertices: mesh.vertices.iter().map(|p| arr(*p)).collect(),

@@ -480,6 +480,7 @@ pub(crate) mod tests {
             params: FrameParams {
                 thickness: None,
                 joint_limits: None,
+                hub_lap: None,
                 spin_angle: std::f64::consts::FRAC_PI_4,
                 expansion: 1.0,
                 cut: None,

@@ -193,6 +193,11 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         "hub lap = frame.json hub_overlap (mm)",
         limits.overlap_claim,
     );
+    // with one lap asked for every link (frame.json params.hub_lap): how far from it
+    let mut one_lap = frame.params.hub_lap.map(|goal| {
+        let row = Worst::max("hub lap off the one lap asked (mm)", goal.tolerance);
+        (goal.length, row)
+    });
     let mut collisions = Worst::max(
         "plates of neighbouring strips reach into each other (mm)",
         limits.collision,
@@ -237,6 +242,9 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         let lap = (fa.placed.hub_plate[k] - fb.placed.hub_plate[m]).dot(&dir);
         laps.see(lap, at);
         claims.see((lap - link.hub_overlap).abs(), at);
+        if let Some((length, row)) = &mut one_lap {
+            row.see((lap - *length).abs(), at);
+        }
         for (f, g) in [(fa, fb), (fb, fa)] {
             for leg in f.legs.iter().flatten() {
                 let section = section_in_plate(leg, &g.placed, thickness);
@@ -347,13 +355,15 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             }
         }
     }
-    let mut rows: Vec<_> = [
-        pins, legs, plates, laps, claims, welds, collisions, span, bend, twist, rims, rebuilt,
-        through, stacked,
-    ]
-    .into_iter()
-    .map(Worst::row)
-    .collect();
+    let one_lap = one_lap.map(|(_, row)| row);
+    let mut rows: Vec<_> = [pins, legs, plates, laps, claims]
+        .into_iter()
+        .chain(one_lap)
+        .chain([
+            welds, collisions, span, bend, twist, rims, rebuilt, through, stacked,
+        ])
+        .map(Worst::row)
+        .collect();
     // the two rows of legs say how many legs are over the limit, not only the deepest
     for legs in [legs_through, legs_rims] {
         let over = legs.outside();

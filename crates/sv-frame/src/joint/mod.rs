@@ -27,8 +27,8 @@ use sv_geom::{segment_closest, Point3, Real, Rotation3, Vector3};
 use sv_unit::Deployment;
 
 use crate::{
-    evaluate, FrameError, FrameUnits, Hub, JointKind, JointLimits, JointRecord, Joints, QuadMesh,
-    Solved, UnitPose,
+    evaluate, FrameError, FrameUnits, Hub, JointKind, JointLimits, JointRecord, Joints, LapGoal,
+    QuadMesh, Solved, UnitPose,
 };
 use piece::{Join, Piece};
 pub(crate) use problem::joint_record;
@@ -68,9 +68,9 @@ pub struct JointOptions {
     pub closeness: Real,
     /// The weld minimum of the hub laps (mm).
     pub min_overlap: Real,
-    /// One hub lap for every link (mm), so that one gauge block checks every hub joint on
-    /// site; `None`: any lap above the minimum.
-    pub overlap: Option<Real>,
+    /// One hub lap for every link, so that one gauge block checks every hub joint on site;
+    /// `None`: any lap above the minimum.
+    pub overlap: Option<LapGoal>,
     /// What the joints must reach.
     pub limits: JointLimits,
     /// Width of a bridge along its joint (mm): turns are weighed as the offset they make at
@@ -640,6 +640,7 @@ pub fn close_joints(
             records: joints,
             thickness: options.thickness,
             limits: options.limits,
+            hub_lap: options.overlap,
         }),
         evaluation,
         report,

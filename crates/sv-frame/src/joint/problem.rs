@@ -695,7 +695,12 @@ impl Problem<'_> {
             let (a, b) = ([p[0], p[1], p[2], p[3]], [p[4], p[5], p[6], p[7]]);
             let lap = hub_overlap(&centroid4(&a), &a[k], &centroid4(&b), &b[m]);
             let short = match o.overlap {
-                Some(target) => target - lap,
+                // anywhere in the band (held within MARGIN of it, as a limit): a gauge
+                // block checks within its tolerance, and the band is the joints' to use
+                Some(goal) => {
+                    let off = goal.length - lap;
+                    (off.abs() - MARGIN * goal.tolerance).max(0.0).copysign(off)
+                }
                 None if laps => (o.min_overlap + LAP_MARGIN - lap).max(0.0),
                 None => 0.0,
             };
@@ -710,13 +715,8 @@ impl Problem<'_> {
             [short, into]
         };
         let now = hub_rows(&pts);
-        let weights = [
-            match o.overlap {
-                Some(_) => W_LAP,
-                None => W_LAP * on(now[0]),
-            },
-            W_STACK * on(now[1]),
-        ];
+        let lap_weight = if o.overlap.is_some() { W_LIMIT } else { W_LAP };
+        let weights = [lap_weight * on(now[0]), W_STACK * on(now[1])];
         let grads = if grad && weights.iter().any(|&w| w > 0.0) {
             fd_jac(&pts, h, hub_rows)
         } else {
