@@ -290,6 +290,53 @@ fn at_200_mm_every_target_folds_and_closes_every_joint() {
     }
 }
 
+/// Issue 15's constant overlap on the targets it names (pavilion, dome, vault) at 300 mm,
+/// `[frame] overlap = "constant"`: by our own fold code every hub lap as cut within 1 mm of
+/// the one lap frame.json asks (a spread of at most 2 mm), at least the weld minimum and as
+/// reported; every leg within 0.5 mm and clear of the hub plate it passes (a relief cut
+/// for it). Not every weld closes with the laps held (docs/config.md: 1-5 stay open), so
+/// the welds are not asserted here; `check` agrees with our figures. About ten minutes:
+/// `make acceptance`.
+#[test]
+#[ignore = "ten minutes: make acceptance"]
+fn a_constant_overlap_holds_every_lap_within_1_mm_at_300_mm() {
+    for target in ["pavilion", "builtin:dome", "builtin:vault"] {
+        let dir = Dir::new();
+        dir.write("constant.toml", "[frame]\noverlap = \"constant\"\n");
+        let mut args = vec!["build", "--config", "constant.toml", "--quiet"];
+        if target != "pavilion" {
+            args.extend(["--target", target]);
+        }
+        args.extend(crate::build::NEST_WORK);
+        dir.run(&args).expect_code(0);
+        let frame = read_json(&dir.join("out/frame.json"));
+        let asked = &frame["params"]["hub_lap"];
+        assert_eq!(asked["tolerance"], 1.0, "{target}: {asked}");
+        let units = frame["units"].as_array().unwrap().len();
+        let (_, stdout, fig) = fold_check(&dir);
+        assert_eq!(fig["legs_checked"], 4 * units, "{target}: {fig}");
+        assert!(
+            f(&fig, "lap_off_one_length_max") <= 1.0,
+            "{target}: {stdout}"
+        );
+        assert!(
+            f(&fig, "lap_max") - f(&fig, "lap_min") <= 2.0,
+            "{target}: {fig}"
+        );
+        assert!(f(&fig, "lap_min") >= 25.0, "{target}: {fig}");
+        assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{target}: {fig}");
+        assert!(f(&fig, "leg_error_max") <= 0.5, "{target}: {fig}");
+        assert_eq!(fig["legs_through_hub_plates"], 0, "{target}: {stdout}");
+        assert_eq!(fig["legs_into_rims"], 0, "{target}: {stdout}");
+        let checked = dir.run(&["check", "out"]);
+        agrees_with_check(&checked, &fig);
+        assert!(
+            row(&checked, "hub lap off the one lap asked").ends_with("ok"),
+            "{target}: {checked:?}"
+        );
+    }
+}
+
 /// `spinvalence build --unit-size 200` with `args`: the 1.5 mm sheet at its least widths,
 /// and by our own fold code every leg within 0.5 mm, every hub lap at least 25 mm and as
 /// reported, every joint within its limits, no plate or leg into another; `check` agrees
@@ -512,13 +559,10 @@ fn a_lap_asked_of_every_link_is_held_by_both_checks() {
         let checked = dir.run(&["check", "out"]);
         checked.expect_code(if holds { 0 } else { 1 });
         let text = row(&checked, "hub lap off the one lap asked");
-        let worst: f64 = text
-            .split_whitespace()
-            .find_map(|w| w.parse().ok())
-            .unwrap_or_else(|| panic!("no figure in {text}"));
+        let theirs = worst(&checked, "hub lap off the one lap asked");
         assert!(
-            (worst - farthest).abs() < 0.01,
-            "check {worst}, ours {farthest}: {text}"
+            (theirs - farthest).abs() < 0.01,
+            "check {theirs}, ours {farthest}: {text}"
         );
         assert_eq!(text.ends_with("FAIL"), !holds, "{text}");
     }
