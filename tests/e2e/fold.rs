@@ -295,10 +295,9 @@ fn at_200_mm_every_target_folds_and_closes_every_joint() {
 /// the one lap frame.json asks (a spread of at most 2 mm), at least the weld minimum and as
 /// reported; every leg within 0.5 mm and clear of the hub plate it passes (a relief cut
 /// for it). Not every weld closes with the laps held (docs/config.md: 1-5 stay open), so
-/// the welds are not asserted here; `check` agrees with our figures. One hub mesh goal
-/// may be missed, and only that one, said in the summary with exit 3: the dome's longest
-/// face side ends at 1.41 of the unit size (422 mm; the goal is 1.4), its tiles stretched
-/// to keep the laps (docs/config.md). About ten minutes: `make acceptance`.
+/// the welds are not asserted here; every hub mesh goal is met (exit 0: until the joint
+/// solve held the face sides, the dome's longest ended at 1.41 of the unit size, goal 1.4);
+/// `check` agrees with our figures. About ten minutes: `make acceptance`.
 #[test]
 #[ignore = "ten minutes: make acceptance"]
 fn a_constant_overlap_holds_every_lap_within_1_mm_at_300_mm() {
@@ -310,21 +309,7 @@ fn a_constant_overlap_holds_every_lap_within_1_mm_at_300_mm() {
             args.extend(["--target", target]);
         }
         args.extend(crate::build::NEST_WORK);
-        let built = dir.run(&args);
-        let unmet: Vec<&str> = built
-            .stdout
-            .lines()
-            .skip_while(|l| !l.starts_with("GOALS NOT MET"))
-            .take_while(|l| l.starts_with("GOALS NOT MET") || l.starts_with(' '))
-            .collect();
-        match built.code {
-            Some(0) => assert!(unmet.is_empty(), "{built:?}"),
-            Some(3) => assert!(
-                unmet.len() == 1 && unmet[0].contains("face sides"),
-                "{target}: {unmet:?}"
-            ),
-            _ => panic!("{target}: {built:?}"),
-        }
+        dir.run(&args).expect_code(0);
         let frame = read_json(&dir.join("out/frame.json"));
         let asked = &frame["params"]["hub_lap"];
         assert_eq!(asked["tolerance"], 1.0, "{target}: {asked}");

@@ -447,11 +447,14 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         let overlap = cfg
             .frame
             .overlap_target(&solved.evaluation.overlaps, min_overlap)?;
+        let (short, long) = sv_surface::Goals::default().side_range;
+        let unit = cfg.secondary.unit_size;
         let joint_options = sv_frame::JointOptions {
             max_iterations: cfg.joints.max_iterations,
             split_iterations: cfg.joints.split_iterations,
             min_overlap,
             overlap,
+            face_sides: Some((short * unit, long * unit)),
             limits: p.joint_limits(),
             bridge_width: p.neck_width,
             bridge_room: 2.0 * p.neck_width,

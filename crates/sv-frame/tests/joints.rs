@@ -322,3 +322,30 @@ fn hubs_held_apart_do_not_shrink_the_tiles_below_the_floor() {
         .fold(f64::INFINITY, f64::min);
     assert!(smallest >= 0.8 - 0.01, "a tile scaled to {smallest}");
 }
+
+#[test]
+fn face_sides_are_held_within_the_hub_meshs_goal() {
+    // the longest side of the cap, and a goal 0.5 % below it: the solve must shorten it
+    let (mesh, solved) = solved_cap();
+    let sides = |m: &QuadMesh| -> Vec<f64> {
+        m.faces
+            .iter()
+            .flat_map(|f| (0..4).map(move |k| (f[k], f[(k + 1) % 4])))
+            .map(|(a, b)| (m.vertices[a] - m.vertices[b]).norm())
+            .collect()
+    };
+    let longest = |m: &QuadMesh| sides(m).into_iter().fold(0.0, f64::max);
+    let limit = 0.995 * longest(&mesh);
+    let options = JointOptions {
+        max_iterations: 60,
+        face_sides: Some((0.0, limit)),
+        ..Default::default()
+    };
+    let (held, _, _) = close_rows(&mesh, &solved, &options);
+    assert!(
+        longest(&held) <= limit * 1.001,
+        "longest side {} mm, goal {limit} mm (started at {} mm)",
+        longest(&held),
+        longest(&mesh)
+    );
+}

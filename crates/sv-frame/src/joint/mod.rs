@@ -71,6 +71,9 @@ pub struct JointOptions {
     /// One hub lap for every link, so that one gauge block checks every hub joint on site;
     /// `None`: any lap above the minimum.
     pub overlap: Option<LapGoal>,
+    /// The hub mesh's goal for every face side (mm, shortest and longest), held where a
+    /// side would leave it; `None`: not held.
+    pub face_sides: Option<(Real, Real)>,
     /// What the joints must reach.
     pub limits: JointLimits,
     /// Width of a bridge along its joint (mm): turns are weighed as the offset they make at
@@ -107,6 +110,7 @@ impl Default for JointOptions {
             closeness: 0.05,
             min_overlap: 0.0,
             overlap: None,
+            face_sides: None,
             limits: JointLimits::default(),
             bridge_width: 7.5,
             bridge_room: 15.0,
