@@ -100,6 +100,7 @@ fn the_default_build_folds_from_its_dxf_as_our_own_code_measures_it() {
         "hub plates at a lap into each other",
         "leg through the neighbour's hub plate, outside its relief",
         "leg through a neighbour's rim",
+        "relief under the hub plate lying on its own",
     ] {
         let line = checked
             .stdout
@@ -122,7 +123,8 @@ fn worst(out: &crate::util::Output, name: &str) -> f64 {
 
 /// `spinvalence check`'s worst hub lap, weld gap, reach (between strips and across a
 /// bridge's slot), hub plates into each other, a leg into the neighbour's hub plate or rim
-/// and widest gap between lapping hub plates are the fold check's, 0.1 mm.
+/// and widest gap between lapping hub plates are the fold check's, 0.1 mm; how deep a
+/// relief reaches under the plate on it, 0.25 mm.
 fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
     for (name, ours) in [
         ("hub lap as cut", "lap_min"),
@@ -152,6 +154,14 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
             "{name}: {theirs} vs {fig}"
         );
     }
+    // how deep a relief reaches under the plate lying on it: each samples its own
+    // quarter-millimetre grid and its own reading of the cuts' outlines
+    let name = "relief under the hub plate lying on its own";
+    let theirs = worst(checked, name);
+    assert!(
+        (theirs - f(fig, "relief_under_upper_max")).abs() <= 0.25,
+        "{name}: {theirs} vs {fig}"
+    );
     // and about as many legs run through the neighbours' hub plates and into their rims (a
     // leg at the limit may fall either side)
     for (name, ours) in [
@@ -189,10 +199,18 @@ fn joints_hold(what: &str, fig: &Value) {
     // cut for it: the leg as a plate, its section through the plate, clear of its steel
     assert!(f(fig, "leg_through_hub_plate_max") <= 0.1, "{what}: {fig}");
     assert_eq!(fig["legs_through_hub_plates"], 0, "{what}: {fig}");
+    // and that relief reaches at most 1.5 mm under the plate lying on it (the lap is kept)
+    relief_stays_out(what, fig);
     // nor does a leg leaving its plate at the rim neck run through a neighbour's rim there
     // (that neighbour's plate lying under the corner, docs/geometry.md 5.5)
     assert!(f(fig, "leg_into_rim_max") <= 0.1, "{what}: {fig}");
     assert_eq!(fig["legs_into_rims"], 0, "{what}: {fig}");
+}
+
+/// The cuts of a hub plate reach at most 1.5 mm (`sv_strips::relief::UNDER_EDGE`) under the
+/// hub plate lying on it at a lap, on our quarter-millimetre grid.
+fn relief_stays_out(what: &str, fig: &Value) {
+    assert!(f(fig, "relief_under_upper_max") <= 1.6, "{what}: {fig}");
 }
 
 /// Every bridge in the strips, found by our code in the DXF outlines, spans its joint,
@@ -328,6 +346,7 @@ fn a_constant_overlap_holds_every_lap_within_1_mm_at_300_mm() {
         assert!(f(&fig, "lap_claim_error_max") <= 0.1, "{target}: {fig}");
         assert!(f(&fig, "leg_error_max") <= 0.5, "{target}: {fig}");
         assert_eq!(fig["legs_through_hub_plates"], 0, "{target}: {stdout}");
+        relief_stays_out(target, &fig);
         assert_eq!(fig["legs_into_rims"], 0, "{target}: {stdout}");
         let checked = dir.run(&["check", "out"]);
         agrees_with_check(&checked, &fig);

@@ -37,7 +37,8 @@ Checks
      hub plates (seen along one's normal) the height of one mid-plane over the
      other stays >= t (or <= -t); how far from it, <= 0.1 mm.  Informational:
      the widest gap between the two over a lap, and how deep each leg's centre
-     line (hub neck to rim neck) runs into the neighbour's hub plate there.
+     line (hub neck to rim neck) runs into the neighbour's hub plate there, and how
+     deep the lower plate's cuts (the relief for that leg) reach under the upper plate.
 
 Exit status: 0 all pass, 1 some check failed, 2 input files unreadable.
 """
@@ -663,46 +664,97 @@ def rim_reach_of(leg, plate, rim_w, t):
     return into_steel(inside, outline, [inset_quad(outline, rim_w)])
 
 
+def inside_polygon(poly, P):
+    """Which of the points P (n x 2) lie inside the closed polygon poly (even-odd rule)."""
+    a = np.asarray(poly, float)[:, :2]
+    b = np.roll(a, -1, axis=0)
+    if len(P) == 0:
+        return np.zeros(0, bool)
+    # a ray to +x crosses only edges beside the points' span and not wholly left of it
+    lo, hi = P.min(0), P.max(0)
+    keep = ((np.maximum(a[:, 1], b[:, 1]) >= lo[1]) & (np.minimum(a[:, 1], b[:, 1]) <= hi[1])
+            & (np.maximum(a[:, 0], b[:, 0]) >= lo[0]))
+    a, b = a[keep], b[keep]
+    y = P[:, 1][:, None]
+    x = P[:, 0][:, None]
+    cond = (a[None, :, 1] > y) != (b[None, :, 1] > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xc = a[None, :, 0] + (y - a[None, :, 1]) / (b[None, :, 1] - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0])
+    return (np.count_nonzero(cond & (x < xc), axis=1) % 2) == 1
+
+
+def distance_to_outline(poly, P):
+    """Distance of each point of P (n x 2) to the closed polygon poly's edges."""
+    a = np.asarray(poly, float)[:, :2]
+    e = np.roll(a, -1, axis=0) - a
+    ee = np.maximum((e * e).sum(1), 1e-300)
+    tt = np.clip((((P[:, None, :] - a[None]) * e[None]).sum(2)) / ee[None], 0.0, 1.0)
+    foot = a[None] + tt[:, :, None] * e[None]
+    return np.linalg.norm(P[:, None, :] - foot, axis=2).min(1)
+
+
+def grid_in(poly, step):
+    """Points every `step` inside the flat polygon poly, and its corners."""
+    S = np.asarray(poly, float)
+    lo, hi = S.min(0), S.max(0)
+    xs, ys = np.meshgrid(np.arange(lo[0], hi[0] + step, step), np.arange(lo[1], hi[1] + step, step))
+    G = np.column_stack([xs.ravel(), ys.ravel()])
+    return np.vstack([G[inside_polygon(S, G)], S])
+
+
+def thinned(cuts):
+    return [np.asarray(cu, float)[::5 if len(cu) > 50 else 1, :2] for cu in cuts]
+
+
 def into_steel(sec, outline, cuts, step=0.5):
     """How deep the flat convex polygon sec lies in a plate's steel: inside the quad
     outline and outside every cut (dense closed contours, taken every ~0.25 mm). Sampled
     every half millimetre."""
     if len(sec) < 3 or outline is None:
         return 0.0
-    S = np.array(sec)
-    lo, hi = S.min(0), S.max(0)
-    xs, ys = np.meshgrid(np.arange(lo[0], hi[0] + step, step), np.arange(lo[1], hi[1] + step, step))
-    G = np.column_stack([xs.ravel(), ys.ravel()])
-
-    def edges(poly):
-        poly = np.asarray(poly, float)[:, :2]
-        return poly, np.roll(poly, -1, axis=0)
-
-    def inside(poly, P):
-        a, b = edges(poly)
-        y = P[:, 1][:, None]
-        x = P[:, 0][:, None]
-        cond = (a[None, :, 1] > y) != (b[None, :, 1] > y)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            xc = a[None, :, 0] + (y - a[None, :, 1]) / (b[None, :, 1] - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0])
-        return (np.count_nonzero(cond & (x < xc), axis=1) % 2) == 1
-    P = np.vstack([G[inside(S, G)], S])
-    cuts = [np.asarray(cu, float)[::5 if len(cu) > 50 else 1, :2] for cu in cuts]
+    P = grid_in(sec, step)
+    cuts = thinned(cuts)
     free = np.zeros(len(P), bool)
     for cu in cuts:
-        free |= inside(cu, P)
+        free |= inside_polygon(cu, P)
     P = P[~free]
     if len(P) == 0:
         return 0.0
     d = np.full(len(P), np.inf)
     for poly in [np.asarray(outline, float)] + cuts:
-        a, b = edges(poly)
-        e = b - a
-        ee = np.maximum((e * e).sum(1), 1e-300)
-        tt = np.clip((((P[:, None, :] - a[None]) * e[None]).sum(2)) / ee[None], 0.0, 1.0)
-        foot = a[None] + tt[:, :, None] * e[None]
-        d = np.minimum(d, np.linalg.norm(P[:, None, :] - foot, axis=2).min(1))
+        d = np.minimum(d, distance_to_outline(poly, P))
     return float(d.max())
+
+
+def cut_under(upper, outline, cuts, step=0.25):
+    """How deep the cuts of a hub plate (flat quad `outline`, its cut contours `cuts`)
+    reach under the plate lying on it at a lap (`upper`, flat, in the same frame): the
+    deepest point inside both plates (0.2 mm inside `outline`, past the round-off of its
+    slots) that a cut took out, from `upper`'s edge."""
+    def ccw(q):
+        q = [np.asarray(p, float) for p in q]
+        a = sum(q[i][0] * q[(i + 1) % len(q)][1] - q[(i + 1) % len(q)][0] * q[i][1] for i in range(len(q)))
+        return q if a > 0 else q[::-1]
+    lap = clip_convex(ccw(upper), ccw(inset_quad(outline, 0.2)))
+    if len(lap) < 3:
+        return 0.0
+    lap = np.array(lap)
+    deepest = 0.0
+    for cu in cuts:
+        cu = np.asarray(cu, float)[:, :2]
+        # a cut into the lap has points of its contour (every ~0.25 mm) there: the grid
+        # covers those and half a millimetre round them
+        near = cu[inside_polygon(lap, cu)]
+        if len(near) == 0:
+            continue
+        lo, hi = near.min(0) - 0.5, near.max(0) + 0.5
+        xs, ys = np.meshgrid(np.arange(lo[0], hi[0] + step, step), np.arange(lo[1], hi[1] + step, step))
+        P = np.vstack([np.column_stack([xs.ravel(), ys.ravel()]), near])
+        P = P[inside_polygon(lap, P)]
+        P = P[inside_polygon(cu, P)]
+        if len(P):
+            deepest = max(deepest, float(distance_to_outline(np.array(ccw(upper)), P).max()))
+    return deepest
 
 
 def load_inputs(d):
@@ -1029,6 +1081,7 @@ def main(argv=None):
     stack_fail = []
     leg_through = (0.0, None)  # a leg's centre line into the neighbour's hub plate at a lap
     legs_through = 0
+    under_upper = (0.0, None)  # a cut (a relief) of the lower hub plate under the upper one
     slot_mismatch = 0
     gap_max = (-float("inf"), None)
     through_links = []
@@ -1071,6 +1124,7 @@ def main(argv=None):
         for u1, u2 in ((f, g), (g, f)):
             if hub_pins[u1] is None or plate3[u2] is None or slot_dense[u2] is None:
                 continue
+            upper_seen = False
             for j in range(4):
                 leg = leg_plate(flat_tile[u1], cut, float(frame["params"]["cut"]["joint"]),
                                 hub_pins[u1][j], rim_pins[u1][j], neck_folds[u1][j],
@@ -1078,6 +1132,14 @@ def main(argv=None):
                 if leg is None:
                     continue
                 sec = leg_section(leg, plate3[u2], hub_mot[u2], thickness)
+                if len(sec) >= 3 and not upper_seen:
+                    # u1's leg runs down through u2's plate: u1's plate is the upper one
+                    upper_seen = True
+                    R, tt = hub_mot[u2][0], hub_mot[u2][1]
+                    up = [(R.T @ (X - tt))[:2] for X in plate3[u1]]
+                    under = cut_under(up, plate_flat[u2], slot_dense[u2])
+                    if under > under_upper[0] or under_upper[1] is None:
+                        under_upper = (under, "%s under %s" % (uid[u2], uid[u1]))
                 d_ = into_steel(sec, plate_flat[u2], slot_dense[u2])
                 if d_ > leg_through[0] or leg_through[1] is None:
                     leg_through = (d_, "%s leg %d into %s" % (uid[u1], j, uid[u2]))
@@ -1231,6 +1293,8 @@ def main(argv=None):
           % (stack_gap[0], stack_gap[1]))
     print("legs through a neighbour's hub plate outside its relief: %d, deepest %.3g mm (%s)"
           % (legs_through, leg_through[0], leg_through[1]))
+    print("info: reliefs under the hub plate lying on theirs at a lap: deepest %.3g mm (%s)"
+          % (under_upper[0], under_upper[1]))
     # legs against the rims of the units round their tile's corners (the e2e tests hold it
     # where the joints close)
     leg_rim = (0.0, None)
@@ -1310,6 +1374,7 @@ def main(argv=None):
             "hub_stack_gap_max": stack_gap[0],
             "legs_through_hub_plates": legs_through,
             "leg_through_hub_plate_max": leg_through[0],
+            "relief_under_upper_max": under_upper[0],
             "legs_into_rims": legs_into_rims,
             "leg_into_rim_max": leg_rim[0],
             "problems": ["%s: %s: %s" % p for p in struct],

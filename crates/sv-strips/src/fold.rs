@@ -228,6 +228,11 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         "leg through the neighbour's hub plate, outside its relief (mm)",
         limits.collision,
     );
+    // and the relief keeps (almost) out from under the upper plate: the lap is not cut
+    let mut under_upper = Worst::max(
+        "relief under the hub plate lying on its own (mm)",
+        crate::relief::UNDER_EDGE + limits.collision,
+    );
     let thickness = params.thickness;
     for (li, link) in frame.links.iter().enumerate() {
         let [a, b] = link.units;
@@ -246,9 +251,15 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             row.see((lap - *length).abs(), at);
         }
         for (f, g) in [(fa, fb), (fb, fa)] {
+            let mut upper = false;
             for leg in f.legs.iter().flatten() {
                 let section = section_in_plate(leg, &g.placed, thickness);
+                // a leg of f runs down through g's plate: f's plate is the upper one
+                upper |= section.len() >= 3;
                 legs_through.see(into_steel(&section, &g.placed.layout.hub, &g.slots), at);
+            }
+            if upper {
+                under_upper.see(cut_under(&f.placed, &g.placed, &g.slots), at);
             }
         }
         if let Some((low, high)) = lap_heights(&fa.placed.hub_plate, &fb.placed.hub_plate) {
@@ -371,6 +382,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         row.at = format!("{}; {over} legs over {} mm", row.at, limits.collision);
         rows.push(row);
     }
+    rows.push(under_upper.row());
     CheckReport { rows }
 }
 
@@ -517,19 +529,52 @@ fn into_steel(section: &[Point2], outline: &[Point2; 4], cuts: &[Vec<[Real; 2]>]
             .map(|c| planar::boundary_distance(p, c))
             .fold(planar::boundary_distance(p, &outline), Real::min)
     };
-    // the section's corners, and its bounding box on a half-millimetre grid inside it
-    let ring = flat(section);
-    let (lo, hi) = planar::bbox(&ring);
-    let step = 0.5;
+    sample(&flat(section), 0.5).map(depth).fold(0.0, Real::max)
+}
+
+/// The corners of the flat polygon `ring`, and the points of a grid `step` apart inside it.
+fn sample(ring: &[[Real; 2]], step: Real) -> impl Iterator<Item = [Real; 2]> + '_ {
+    let (lo, hi) = planar::bbox(ring);
     let (nx, ny) = (
         ((hi[0] - lo[0]) / step).ceil() as usize,
         ((hi[1] - lo[1]) / step).ceil() as usize,
     );
-    let grid = (0..=nx).flat_map(|i| (0..=ny).map(move |j| (i, j)));
-    grid.map(|(i, j)| [lo[0] + i as Real * step, lo[1] + j as Real * step])
-        .filter(|p| planar::point_in_polygon(*p, &ring))
+    let grid = (0..=nx).flat_map(move |i| (0..=ny).map(move |j| (i, j)));
+    grid.map(move |(i, j)| [lo[0] + i as Real * step, lo[1] + j as Real * step])
+        .filter(|p| planar::point_in_polygon(*p, ring))
         .chain(ring.iter().copied())
-        .map(depth)
+}
+
+/// How deep the cuts of `lower`'s hub plate (`cuts`, flat: its slots with their reliefs)
+/// reach under `upper`'s hub plate lying on it at their lap: the deepest point of both
+/// plates (0.2 mm inside the lower one's outline, past the round-off of its slots) that a
+/// cut took out, from the upper plate's edge, on a quarter-millimetre grid and the cuts'
+/// outlines.
+fn cut_under(upper: &Placed, lower: &Placed, cuts: &[Vec<[Real; 2]>]) -> Real {
+    let to_lower = lower.hub.inverse();
+    let mut up: [Point2; 4] = std::array::from_fn(|i| {
+        let q = to_lower * upper.hub_plate[i];
+        Point2::new(q.x, q.y)
+    });
+    if crate::leg_plate::area(&up) < 0.0 {
+        up.reverse();
+    }
+    let Some(own) = sv_unit::inset(&lower.layout.hub, 0.2) else {
+        return 0.0;
+    };
+    let lap = flat(&crate::leg_plate::clip_convex(&own, &up));
+    let edge = flat(&up);
+    // the grid, and the cuts' own outlines where they run inside the lap (the deepest
+    // point of a cut lies on its outline)
+    let outlines = cuts
+        .iter()
+        .flatten()
+        .filter(|p| planar::point_in_polygon(**p, &lap))
+        .copied();
+    sample(&lap, 0.25)
+        .filter(|p| cuts.iter().any(|c| planar::point_in_polygon(*p, c)))
+        .chain(outlines)
+        .map(|p| planar::boundary_distance(p, &edge))
         .fold(0.0, Real::max)
 }
 
