@@ -24,7 +24,7 @@ DATA=../shared/datasets/nesting
 DATA=$(cd "$DATA" && pwd)
 INSTANCES="albano blaz1 dagli fu jakobs1 jakobs2 mao marques shapes0 shapes1 shirts swim trousers"
 cargo build --release -p sv-nest --example spp >/dev/null
-OURS=$PWD/target/release/examples/spp
+OURS=${CARGO_TARGET_DIR:-$PWD/target}/release/examples/spp
 mkdir -p target/bench
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT

@@ -833,6 +833,76 @@ impl Bin {
         out
     }
 
+    /// [`Bin::overlaps`] after the members marked in `moved` moved from a layout whose
+    /// overlaps were `before`: the pairs of two unmoved members keep their overlap, only
+    /// the moved members' collisions are looked up (sparrow's collision tracker updates
+    /// per move likewise), so a pass costs a query per moved item, not one per item.
+    /// The same pairs and overlaps as [`Bin::overlaps`], sorted by pair.
+    fn overlaps_after_moves(
+        &self,
+        before: &[(usize, usize, f32)],
+        moved: &[bool],
+        probe: &mut Probe,
+    ) -> Vec<(usize, usize, f32)> {
+        let Probe { collector, poles } = probe;
+        let n = self.members.len();
+        let placed = self.layout.placed_items();
+        let mut out: Vec<(usize, usize, f32)> = before
+            .iter()
+            .copied()
+            .filter(|&(i, j, _)| !moved[i] && (j == n || !moved[j]))
+            .collect();
+        for i in (0..n).filter(|&i| moved[i]) {
+            let shape = self.placed_shape(i);
+            collector.clear();
+            self.layout.cde().collect_poly_collisions(
+                shape,
+                &SkipPk(self.members[i].pk),
+                collector,
+            );
+            let mut loaded = false;
+            for (_, e) in collector.iter() {
+                match e {
+                    BasicHazardEntity::PlacedItem { pk, .. } => {
+                        let j = self.idx_of[pk];
+                        // each pair measured from its lower index, as `overlaps` does; a
+                        // pair of two moved members once
+                        let other = placed[*pk].shape();
+                        if j > i {
+                            if !loaded {
+                                poles.load(shape);
+                                loaded = true;
+                            }
+                            out.push((i, j, pair_overlap_with(shape, poles, other)));
+                        } else if !moved[j] {
+                            poles.load(other);
+                            loaded = false;
+                            out.push((j, i, pair_overlap_with(other, poles, shape)));
+                        }
+                    }
+                    BasicHazardEntity::Exterior => {
+                        out.push((i, n, ext_overlap(shape, self.bounds)));
+                    }
+                    _ => {}
+                }
+            }
+        }
+        out.sort_by_key(|x| (x.0, x.1));
+        #[cfg(debug_assertions)]
+        {
+            let mut all = self.overlaps(&mut Probe::default());
+            all.sort_by_key(|x| (x.0, x.1));
+            debug_assert_eq!(all.len(), out.len(), "pairs {all:?} vs {out:?}");
+            for (a, b) in all.iter().zip(&out) {
+                debug_assert!(
+                    a.0 == b.0 && a.1 == b.1 && (a.2 - b.2).abs() <= 1e-3 * a.2.abs().max(1e-6),
+                    "{a:?} vs {b:?}"
+                );
+            }
+        }
+        out
+    }
+
     /// Moves member `i` to the position of least weighted overlap found by sampling (sparrow's
     /// search): 25 samples around its current place and 50 anywhere in the container, the 3 best
     /// distinct ones refined by a coarse coordinate descent, the best of those by a fine one.
@@ -937,6 +1007,8 @@ impl Bin {
         let n = self.members.len();
         let mut gls = Gls::new(n);
         let mut probe = Probe::default();
+        // the other workers' copies of the layout, made at the first pass
+        let mut copies: Vec<Bin> = Vec::new();
         let mut ov = self.overlaps(&mut probe);
         if ov.is_empty() {
             return 0.0;
@@ -963,7 +1035,10 @@ impl Bin {
                     }
                     self.overlaps(&mut probe)
                 } else {
-                    self.move_pass_on_workers(&colliding, &gls, rng, budget)
+                    if copies.is_empty() {
+                        copies = (1..self.workers).map(|_| self.clone()).collect();
+                    }
+                    self.move_pass_on_workers(&mut copies, &colliding, &ov, &gls, rng, budget)
                 };
                 if ov.is_empty() {
                     return 0.0;
@@ -998,7 +1073,9 @@ impl Bin {
     /// result does not depend on the threads. Returns its overlaps.
     fn move_pass_on_workers(
         &mut self,
+        copies: &mut [Bin],
         colliding: &[usize],
+        before: &[(usize, usize, f32)],
         gls: &Gls,
         rng: &mut Rng64,
         budget: &mut Budget,
@@ -1010,10 +1087,17 @@ impl Bin {
             let mut probe = Probe::default();
             let mut order = colliding.to_vec();
             order.shuffle(&mut rng);
+            let start: Vec<DTransformation> = bin.members.iter().map(|m| m.dt).collect();
             for &i in &order {
                 bin.move_item(i, gls, &mut rng, &mut b, &mut probe);
             }
-            let overlaps = bin.overlaps(&mut probe);
+            let moved: Vec<bool> = bin
+                .members
+                .iter()
+                .zip(&start)
+                .map(|(m, dt)| m.dt != *dt)
+                .collect();
+            let overlaps = bin.overlaps_after_moves(before, &moved, &mut probe);
             let loss = overlaps
                 .iter()
                 .map(|&(i, j, o)| gls.get(i, j.min(n)) * o)
@@ -1024,7 +1108,10 @@ impl Bin {
                 evals: b.evals,
             }
         };
-        let mut copies: Vec<Bin> = (1..self.workers).map(|_| self.clone()).collect();
+        // the copies follow this layout: only the items that differ move
+        for c in copies.iter_mut() {
+            c.follow(self);
+        }
         // on the thread pool (no thread started per pass); in worker order
         let budgets: Vec<Budget> = (0..self.workers).map(|_| budget.helper()).collect();
         let mut bins: Vec<&mut Bin> = std::iter::once(&mut *self)
@@ -1046,9 +1133,25 @@ impl Bin {
             }
         });
         if best > 0 {
-            *self = copies.swap_remove(best - 1);
+            std::mem::swap(self, &mut copies[best - 1]);
         }
         passes.swap_remove(best).overlaps
+    }
+
+    /// Moves the members that are placed differently in `master` (a copy of this bin whose
+    /// members have moved since) to their places there: a copy kept in step with a few
+    /// moves instead of a clone of the whole layout.
+    fn follow(&mut self, master: &Bin) {
+        debug_assert_eq!(self.members.len(), master.members.len());
+        if self.bounds != master.bounds {
+            self.set_bounds(master.bounds);
+        }
+        for i in 0..master.members.len() {
+            let dt = master.members[i].dt;
+            if self.members[i].dt != dt {
+                self.relocate(i, dt);
+            }
+        }
     }
 
     /// Moves the container's right edge to `x_max`: the items whose bbox centre is right of
@@ -1127,9 +1230,9 @@ impl Bin {
                 .filter(|&j| shape.collides_with(&bin.placed_shape(j).poi().center))
                 .collect()
         };
-        let (ra, rb) = (riders(self, a), riders(self, b));
         let na = closest_allowed(&self.members[a].item, db);
         let nb = closest_allowed(&self.members[b].item, da);
+        let (ra, rb) = (riders(self, a), riders(self, b));
         self.relocate(a, na);
         self.relocate(b, nb);
         for (list, old, new) in [(ra, da, na), (rb, db, nb)] {
