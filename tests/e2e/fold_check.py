@@ -464,6 +464,13 @@ def segment_reach(x0, x1, pf, t):
     return max(0.0, max(at(s_) for s_ in cand))
 
 
+def ccw(q):
+    """The flat polygon q (points), counter-clockwise."""
+    q = [np.asarray(p, float) for p in q]
+    a = sum(q[i][0] * q[(i + 1) % len(q)][1] - q[(i + 1) % len(q)][0] * q[i][1] for i in range(len(q)))
+    return q[::-1] if a < 0 else q
+
+
 def clip_convex(P, Q):
     """Part of convex polygon P inside convex counter-clockwise polygon Q (2D)."""
     out = [np.asarray(p, float) for p in P]
@@ -491,9 +498,7 @@ def lap_heights(A, B):
     ca, na, _, _, _ = plate_frame(A)
     if abs(np.dot(na, nb)) < 1e-6:
         return None
-    area = sum(qb[i][0] * qb[(i + 1) % 4][1] - qb[(i + 1) % 4][0] * qb[i][1] for i in range(4))
-    if area < 0:
-        qb = qb[::-1]
+    qb = ccw(qb)
     qa = [np.array([np.dot(p - cb, ub), np.dot(p - cb, vb)]) for p in A]
     ov = clip_convex(qa, qb)
     if len(ov) < 3:
@@ -632,10 +637,7 @@ def section_inside(leg, plate, t):
     sec = hull2([np.array([np.dot(p - c, u), np.dot(p - c, v)]) for p in pts])
     if len(sec) < 3:
         return None
-    outline = [np.asarray(p, float) for p in q2]
-    if sum(outline[i][0] * outline[(i + 1) % 4][1] - outline[(i + 1) % 4][0] * outline[i][1]
-           for i in range(4)) < 0:
-        outline = outline[::-1]
+    outline = ccw(q2)
     inside = clip_convex(sec, outline)
     if len(inside) < 3:
         return None
@@ -731,11 +733,8 @@ def cut_under(upper, outline, cuts, step=0.25):
     reach under the plate lying on it at a lap (`upper`, flat, in the same frame): the
     deepest point inside both plates (0.2 mm inside `outline`, past the round-off of its
     slots) that a cut took out, from `upper`'s edge."""
-    def ccw(q):
-        q = [np.asarray(p, float) for p in q]
-        a = sum(q[i][0] * q[(i + 1) % len(q)][1] - q[(i + 1) % len(q)][0] * q[i][1] for i in range(len(q)))
-        return q if a > 0 else q[::-1]
-    lap = clip_convex(ccw(upper), ccw(inset_quad(outline, 0.2)))
+    upper = np.array(ccw(upper))
+    lap = clip_convex(upper, ccw(inset_quad(outline, 0.2)))
     if len(lap) < 3:
         return 0.0
     lap = np.array(lap)
@@ -753,7 +752,7 @@ def cut_under(upper, outline, cuts, step=0.25):
         P = P[inside_polygon(lap, P)]
         P = P[inside_polygon(cu, P)]
         if len(P):
-            deepest = max(deepest, float(distance_to_outline(np.array(ccw(upper)), P).max()))
+            deepest = max(deepest, float(distance_to_outline(upper, P).max()))
     return deepest
 
 
