@@ -97,6 +97,94 @@ fn unmet_goals_still_build_everything_and_exit_3() {
     assert!(dir.join("s/mesh.obj").exists());
 }
 
+/// A hub mesh whose parts cannot be cut (the arched tent at 150 mm: its faces bend so far
+/// from planar that two tiles of a strip overlap too little for a bridge) still gives the
+/// user the hub mesh, the frame and the report to look at, with the strips stage's reason
+/// among the unmet goals, and exit 3; nothing of an earlier build in the directory is left
+/// to pass for this one's parts.
+#[test]
+fn parts_that_cannot_be_cut_leave_the_mesh_frame_and_report_and_exit_3() {
+    let dir = Dir::new();
+    let target = fixtures::path("targets/arched_tent.obj")
+        .display()
+        .to_string();
+    // an earlier build's parts in the output directory
+    std::fs::create_dir_all(dir.join("o/strips")).unwrap();
+    std::fs::create_dir_all(dir.join("o/sheets")).unwrap();
+    for f in [
+        "strips/A01.dxf",
+        "sheets/sheet-01.dxf",
+        "strips.json",
+        "nest.json",
+        "bom.csv",
+    ] {
+        std::fs::write(dir.join(&format!("o/{f}")), "old").unwrap();
+    }
+    let out = dir.run(&[
+        "build",
+        "--target",
+        &target,
+        "--unit-size",
+        "150",
+        "--out",
+        "o",
+    ]);
+    out.expect_code(3);
+    let warning = out
+        .stderr
+        .lines()
+        .find(|l| l.starts_with("warning: ") && l.contains("exit code 3"))
+        .unwrap_or_else(|| panic!("{out:?}"));
+    assert!(
+        warning.contains("no strips cut: profile: strip ")
+            && warning.contains("the hub mesh, the frame and the report were written"),
+        "{warning}"
+    );
+    assert!(
+        out.stdout.contains("none cut (see GOALS NOT MET)"),
+        "{out:?}"
+    );
+    for f in [
+        "mesh.obj",
+        "frame.obj",
+        "frame.json",
+        "report.json",
+        "report.html",
+        "timings.json",
+    ] {
+        assert!(dir.join(&format!("o/{f}")).exists(), "{f} missing: {out:?}");
+    }
+    for f in ["strips.json", "nest.json", "bom.csv"] {
+        assert!(!dir.join(&format!("o/{f}")).exists(), "{f} left: {out:?}");
+    }
+    for d in ["strips", "sheets"] {
+        let left = std::fs::read_dir(dir.join(&format!("o/{d}")))
+            .unwrap()
+            .count();
+        assert_eq!(left, 0, "{d}/ not empty");
+    }
+    // the files agree with each other: one unit per face of the hub mesh
+    let mesh = std::fs::read_to_string(dir.join("o/mesh.obj")).unwrap();
+    let faces = mesh.lines().filter(|l| l.starts_with("f ")).count();
+    let frame = read_json(&dir.join("o/frame.json"));
+    assert_eq!(frame["units"].as_array().unwrap().len(), faces);
+    let report = read_json(&dir.join("o/report.json"));
+    assert!(
+        report["unmet"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|l| l.as_str().unwrap().starts_with("no strips cut: ")),
+        "{report}"
+    );
+    let html = std::fs::read_to_string(dir.join("o/report.html")).unwrap();
+    assert!(
+        html.contains("no strips cut: "),
+        "the report does not say why"
+    );
+    assert!(!html.contains(">-0.0"), "a negative zero in the report");
+}
+
 /// The coarse layout of `sv-surface/tests/layout.rs` as an OBJ: a 3 x 3 grid on the
 /// built-in dome with one edge turned. Returns the text and the interior vertices
 /// (0-based) that get three, three and five faces.

@@ -62,6 +62,9 @@ pub struct StageOptions {
     pub nest: sv_nest::NestOptions,
     /// The sheet the parts are cut from, and why that one (the summary's "sheet" row).
     pub sheet: String,
+    /// Why no sheet's hub laps can reach the weld minimum at this unit size, where none
+    /// can: the build then leaves the joints open and names the laps as an unmet goal.
+    pub unweldable: Option<String>,
 }
 
 /// The config after the command line has overridden the file, and the stage options it
@@ -108,7 +111,7 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
     }
     cfg.secondary.check().map_err(|e| anyhow!("{e}"))?;
     cfg.primary.min_overlap(&cfg.profile)?;
-    let sheet = sheet_for_unit_size(&mut cfg, profile_given)?;
+    let (sheet, unweldable) = sheet_for_unit_size(&mut cfg, profile_given);
     if !cfg.joints.close && cfg.frame != crate::config::FrameConfig::default() {
         bail!("frame: parameter overlap needs the joint solve ([joints] close = true)");
     }
@@ -130,6 +133,7 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
             strips,
             nest,
             sheet,
+            unweldable,
         },
     ))
 }
@@ -164,22 +168,44 @@ pub fn load_target(spec: &str, unit: f64, quiet: bool) -> Result<TargetMesh> {
 /// default, or, where the default's hub laps cannot reach the weld minimum at this unit
 /// size, the thickest sheet whose least profile can (`ProfileParams::for_unit_size`: the
 /// flat grid's estimate, docs/geometry.md 5.4). Where no sheet's can, not even the config's,
-/// the build stops before any work, naming the least unit size and the weld minimum that
-/// would do.
-fn sheet_for_unit_size(cfg: &mut BuildConfig, given: bool) -> Result<String> {
+/// the second value says why, naming the least unit size and the weld minimum that would
+/// do; the build then cuts the config's sheet, or the one with the shallowest hub.
+fn sheet_for_unit_size(cfg: &mut BuildConfig, given: bool) -> (String, Option<String>) {
     let mm = |x: f64| format!("{} mm", number(x));
     let p = &cfg.profile;
     let unit = cfg.secondary.unit_size;
     // a weld minimum that cannot be read was refused before this
     let minimum = |q: &sv_strips::ProfileParams| cfg.primary.min_overlap(q).unwrap_or(0.0);
     let Some(fits) = p.for_unit_size(unit, minimum) else {
-        return Err(no_sheet_welds(p, unit, minimum));
+        let why = no_sheet_welds(p, unit, minimum);
+        if given {
+            return (
+                format!("{} (the config's [profile])", mm(p.thickness)),
+                Some(why),
+            );
+        }
+        let best = p.shallowest_hub();
+        let row = format!(
+            "{} at its least widths (leg {}, neck {}, rim {}, slots {}), the shallowest hub \
+             the profile rules allow; no sheet's hub laps reach the weld minimum at {} units",
+            mm(best.thickness),
+            number(best.leg_width),
+            number(best.neck_width),
+            number(best.rim_width),
+            number(best.slot_width),
+            mm(unit),
+        );
+        cfg.profile = best;
+        return (row, Some(why));
     };
     if given {
-        return Ok(format!("{} (the config's [profile])", mm(p.thickness)));
+        return (
+            format!("{} (the config's [profile])", mm(p.thickness)),
+            None,
+        );
     }
     if fits == *p {
-        return Ok(format!("{} (the default)", mm(p.thickness)));
+        return (format!("{} (the default)", mm(p.thickness)), None);
     }
     let why = format!(
         "{} at its least widths (leg {}, neck {}, rim {}, slots {}), chosen for {} units: the \
@@ -196,7 +222,7 @@ fn sheet_for_unit_size(cfg: &mut BuildConfig, given: bool) -> Result<String> {
         mm(minimum(p)),
     );
     cfg.profile = fits;
-    Ok(why)
+    (why, None)
 }
 
 /// Why no sheet's hub laps reach the weld minimum at `unit` mm, with the two levers: the
@@ -208,7 +234,7 @@ fn no_sheet_welds(
     p: &sv_strips::ProfileParams,
     unit: f64,
     minimum: impl Fn(&sv_strips::ProfileParams) -> f64,
-) -> anyhow::Error {
+) -> String {
     let best = p.shallowest_hub();
     let need = minimum(&best);
     let lap = best.flat_lap(unit);
@@ -231,7 +257,7 @@ fn no_sheet_welds(
             String::new(),
         )
     };
-    anyhow!(
+    format!(
         "secondary.unit_size {}: no sheet's hub laps reach the weld minimum {} mm at this \
          unit size: {reach} with {} mm sheet at its least widths (leg {}, rim {}, slots {}; \
          the flat grid's lap, docs/geometry.md 5.4); raise secondary.unit_size to at least \
@@ -304,6 +330,9 @@ pub struct Outcome {
     pub out: std::path::PathBuf,
     /// The fold check's failing rows, as one warning line (`spinvalence check DIR`).
     pub fold_warning: Option<String>,
+    /// Whether the strips could not be cut: only the hub mesh, the frame and the report
+    /// were written.
+    pub partial: bool,
 }
 
 /// Load the designer's coarse layout (a quad OBJ, planarity not required).
@@ -315,13 +344,11 @@ fn load_layout(path: &Path) -> Result<sv_frame::QuadMesh> {
     )?)
 }
 
-/// Run `build`. Nothing is written unless every stage succeeded; a hub mesh that misses
-/// some goals is still carried through every stage and written (the outcome names them).
-/// Every hub lap as cut must be long enough to weld (AWS D1.1: at least 5 t and 25 mm).
-/// Nothing is written otherwise: the error names the shortest lap and the levers, with the
-/// values that would give the minimum there (the lap of a square unit grows by
-/// sqrt(2) - 1 = 0.414 mm per mm of unit size and shrinks by 2 sqrt(2) = 2.83 mm per mm the
-/// hub lies deeper inside its tile: docs/geometry.md, "Sizes that can be welded").
+/// Every hub lap as cut must be long enough to weld (AWS D1.1: at least 5 t and 25 mm):
+/// where one is not, the error names the shortest lap and the levers, with the values that
+/// would give the minimum there (the lap of a square unit grows by sqrt(2) - 1 = 0.414 mm
+/// per mm of unit size and shrinks by 2 sqrt(2) = 2.83 mm per mm the hub lies deeper inside
+/// its tile: docs/geometry.md, "Sizes that can be welded"); `run` takes it as an unmet goal.
 fn weldable(solved: &sv_frame::Solved, min_overlap: f64, cfg: &BuildConfig) -> Result<()> {
     let overlaps = &solved.evaluation.overlaps;
     let Some((worst, lap)) = overlaps
@@ -394,6 +421,10 @@ fn shallower_hub(p: &sv_strips::ProfileParams, by: f64) -> String {
     }
 }
 
+/// Run `build`. Bad input writes nothing. Unmet goals (the hub mesh's, hub laps too short to
+/// weld) do not stop it: every stage runs and everything is written, the outcome naming
+/// them; where the strips cannot be cut, the hub mesh, the frame and the report are still
+/// written ([`write_without_strips`]). Otherwise files appear all together or not at all.
 pub fn run(args: &BuildArgs) -> Result<Outcome> {
     let started = Instant::now();
     let (mut cfg, mut options) = resolve(args)?;
@@ -439,7 +470,9 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     // close the joints: the hub mesh and every unit's plates moved together, so that the
     // parts as cut meet (bridges fold, plates of neighbouring strips touch)
     let t_joints = Instant::now();
-    let (mesh, solved, joints) = if cfg.joints.close {
+    // where no sheet's laps reach the weld minimum the joint solve cannot make them (it
+    // lifts short laps by a few mm, not by tens), so the joints are left open
+    let (mesh, solved, joints) = if cfg.joints.close && options.unweldable.is_none() {
         let frame0 = solved.to_frame_file(&mesh);
         let surface = sv_surface::TargetSurface::new(&target, &mesh)
             .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
@@ -534,20 +567,94 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         (mesh, solved, None)
     };
     let joints_s = t_joints.elapsed().as_secs_f64();
-    if let Err(short) = weldable(&solved, min_overlap, &cfg) {
-        // on a hub mesh that met its goals the parameters are to blame: nothing is written;
-        // on one that did not, short laps are one more unmet goal, and everything is written
-        // for the user to look at
-        if report.unmet.is_empty() {
-            bail!("{}: {short}", cfg.target);
-        }
+    // laps too short to weld are an unmet goal: everything that can be made is still made
+    // and written for the user to look at, and the build exits with its own code
+    if let Some(why) = &options.unweldable {
+        report.unmet.push(format!(
+            "hub laps too short to weld: {why}; the joints were left open"
+        ));
+    } else if let Err(short) = weldable(&solved, min_overlap, &cfg) {
         report.unmet.push(short.to_string());
     }
+    let summary_head = |report: &SecondaryReport, frame: &sv_frame::FrameFile, t: &Timings| {
+        let mut rows = summary_rows(
+            &cfg,
+            report,
+            &options.sheet,
+            &solved.report,
+            &hub_overlap_text(frame),
+            t,
+        );
+        let at = rows.len() - 2;
+        let joint = match &joints {
+            Some(j) => {
+                let mut joint = joint_rows(j, cfg.strips.direction, frame);
+                let tried_both = cfg.joints.both_directions && args.strip_direction.is_none();
+                joint.push(open_joints_row(frame, tried_both));
+                joint
+            }
+            None if cfg.joints.close => vec![vec![
+                "joints".into(),
+                "left open: no sheet's hub laps reach the weld minimum at this unit size".into(),
+            ]],
+            None => Vec::new(),
+        };
+        rows.splice(at..at, joint);
+        for (k, line) in report.unmet.iter().enumerate() {
+            let name = if k == 0 { "GOALS NOT MET" } else { "" };
+            rows.insert(3 + k, vec![name.into(), line.clone()]);
+        }
+        rows
+    };
 
     let t2 = Instant::now();
     let mut frame = solved.to_frame_file(&mesh);
-    let stage = strips::run(&mut frame, &options.strips, &cfg.profile)
-        .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
+    let stage = match strips::run(&mut frame, &options.strips, &cfg.profile) {
+        Ok(stage) => stage,
+        Err(e) => {
+            // parts that cannot be cut are never written; the hub mesh, the frame and the
+            // report still are, with the reason among the unmet goals
+            report.unmet.push(format!("no strips cut: {e}"));
+            let timings = Timings {
+                secondary: secondary_s,
+                primary: primary_s,
+                joints: joints_s,
+                strips: t2.elapsed().as_secs_f64(),
+                nest: 0.0,
+                report: 0.0,
+                total: started.elapsed().as_secs_f64(),
+                nest_search: sv_nest::SearchReport::default(),
+            };
+            drop(files);
+            let written = write_without_strips(
+                &cfg,
+                &mesh,
+                &frame,
+                &report,
+                &timings,
+                [strips_dir, sheets_dir],
+            )?;
+            if !args.quiet {
+                let mut rows = summary_head(&report, &frame, &timings);
+                let at = rows.len() - 2;
+                rows.insert(
+                    at,
+                    vec![
+                        "strips".into(),
+                        "none cut (see GOALS NOT MET); strips/ and sheets/ are empty".into(),
+                    ],
+                );
+                rows.push(vec!["wrote".into(), paths_text(&written)]);
+                output::print_out(&output::table(&rows))?;
+            }
+            return Ok(Outcome {
+                unmet: report.unmet.clone(),
+                out: cfg.out.clone(),
+                fold_warning: None,
+                partial: true,
+            });
+        }
+    };
     let strips_json = sv_io::inline_number_arrays(&serde_json::to_string_pretty(&stage.file)?);
     for (name, text) in &stage.drawings {
         strips_dir.write(name, text)?;
@@ -630,21 +737,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     written.insert(0, strips_path.join(""));
 
     if !args.quiet {
-        let mut rows = summary_rows(
-            &cfg,
-            &report,
-            &options.sheet,
-            &solved.report,
-            &hub_overlap_text(&frame),
-            &timings,
-        );
-        if let Some(j) = &joints {
-            let at = rows.len() - 2;
-            let mut joint = joint_rows(j, cfg.strips.direction, &frame);
-            let tried_both = cfg.joints.both_directions && args.strip_direction.is_none();
-            joint.push(open_joints_row(&frame, tried_both));
-            rows.splice(at..at, joint);
-        }
+        let mut rows = summary_head(&report, &frame, &timings);
         // the stage rows go before the last two (timings and total)
         let mut stage_rows = vec![vec![
             "strips".into(),
@@ -661,18 +754,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         stage_rows.extend(report::summary_rows(&report_stage, &report_path));
         let at = rows.len() - 2;
         rows.splice(at..at, stage_rows);
-        for (k, line) in report.unmet.iter().enumerate() {
-            let name = if k == 0 { "GOALS NOT MET" } else { "" };
-            rows.insert(3 + k, vec![name.into(), line.clone()]);
-        }
-        rows.push(vec![
-            "wrote".into(),
-            written
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-        ]);
+        rows.push(vec!["wrote".into(), paths_text(&written)]);
         output::print_out(&output::table(&rows))?;
         output::print_out(&format!(
             "fold check of the parts as cut (spinvalence check {}):\n{}",
@@ -706,7 +788,66 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         unmet: report.unmet.clone(),
         out: cfg.out.clone(),
         fold_warning,
+        partial: false,
     })
+}
+
+fn paths_text(paths: &[std::path::PathBuf]) -> String {
+    let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    names.join(", ")
+}
+
+/// The files of a build whose strips could not be cut: the hub mesh, the frame and the
+/// report (without strips and sheets) with the timings. `strips/` and `sheets/` are left
+/// empty and `strips.json`, `nest.json` and `bom.csv` removed, so that no part of an
+/// earlier build in the directory passes for one of this build.
+fn write_without_strips(
+    cfg: &BuildConfig,
+    mesh: &sv_frame::QuadMesh,
+    frame: &sv_frame::FrameFile,
+    report: &SecondaryReport,
+    timings: &Timings,
+    dirs: [AtomicDir; 2],
+) -> Result<Vec<std::path::PathBuf>> {
+    let names = [
+        "mesh.obj",
+        "frame.obj",
+        "report.html",
+        "timings.json",
+        "report.json",
+        "frame.json",
+    ];
+    let files = AtomicFiles::create(&cfg.out, &names)?;
+    let no_strips = sv_strips::StripsFile::new(
+        &[],
+        &[],
+        &cfg.profile,
+        frame.params.expansion,
+        &sv_strips::StripOptions::default(),
+    );
+    let html = report::run(&cfg.target, frame, &no_strips, None, report)?.html;
+    let header = format!("spinvalence hub mesh of {}, mm, Z up", cfg.target);
+    let written = files.commit(&[
+        &sv_io::write_quad_obj(mesh, &header),
+        &sv_io::frame_to_obj(frame),
+        &html,
+        &serde_json::to_string_pretty(timings)?,
+        &serde_json::to_string_pretty(report)?,
+        &sv_io::frame_to_json(frame),
+    ])?;
+    for dir in dirs {
+        dir.commit()?;
+    }
+    for name in ["strips.json", "nest.json", "bom.csv"] {
+        let path = cfg.out.join(name);
+        match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                bail!("{}: {}", path.display(), output::io_message(&e))
+            }
+            _ => {}
+        }
+    }
+    Ok(written)
 }
 
 /// What closing the joints gives: the moved hub mesh, the frame on it, and the report.

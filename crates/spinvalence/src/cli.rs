@@ -12,8 +12,8 @@ Examples:
 
 Lengths are millimetres, Z is up, angles on the command line are degrees.
 Exit codes: 0 success, 1 `check` found a violation, 2 bad input or usage (or, with
-`build --strict`, hub mesh goals not met), 3 `build` wrote everything but some hub mesh
-goals are not met (the summary names them).";
+`build --strict`, goals not met), 3 `build` wrote what it could make but some goals are
+not met (the summary names them).";
 
 const SOLVE_EXAMPLES: &str = "\
 Examples:
@@ -87,10 +87,12 @@ SVG per sheet), report.html (the build report: open it in a browser, it needs no
 bom.csv (one row per strip), report.json and timings.json, all or nothing.
 `spinvalence build --print-config` prints a config file with every default.
 
-Exit codes: 0 every hub mesh goal met; 3 built and written, but some goals are not met
-(planarity, conical, distance to target or boundary, coverage, edge ratio, face sides):
-the summary and report.html name each with its worst place; 2 bad input or usage, or
-with --strict unmet goals (the files are still written, to look at).";
+Exit codes: 0 every goal met; 3 built and written, but some goals are not met (the hub
+mesh's planarity, conical, distance to target or boundary, coverage, edge ratio, face
+sides; hub laps long enough to weld; parts that can be cut): the summary and report.html
+name each with its worst place, and where the strips could not be cut only the hub mesh,
+the frame and the report are written; 2 bad input or usage, or with --strict unmet goals
+(the files are still written, to look at).";
 
 const NEST_EXAMPLES: &str = "\
 Examples:
@@ -219,7 +221,7 @@ pub struct BuildArgs {
     /// included; it is subdivided to the unit size, laid onto the target and optimised.
     #[arg(long, value_name = "COARSE.obj")]
     pub layout: Option<PathBuf>,
-    /// Unmet hub mesh goals are an error (exit code 2) instead of exit code 3.
+    /// Unmet goals are an error (exit code 2) instead of exit code 3.
     #[arg(long)]
     pub strict: bool,
     /// Spin angle of the hubs in degrees (default 45).

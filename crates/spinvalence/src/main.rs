@@ -2,8 +2,8 @@
 //!
 //! Thin by design: parse arguments ([`cli`]), call the library crates, print, and map
 //! errors to exit codes. Exit codes: 0 success, 1 `check` found a violation, 2 bad input
-//! or usage (or unmet hub mesh goals with `build --strict`), 3 `build` wrote everything but
-//! some hub mesh goals are not met. Every error is one line on stderr: `error: what and
+//! or usage (or unmet goals with `build --strict`), 3 `build` wrote what it could make but
+//! some goals are not met. Every error is one line on stderr: `error: what and
 //! where`.
 
 mod build;
@@ -30,7 +30,7 @@ use cli::{Cli, Command};
 const EXIT_VIOLATION: u8 = 1;
 /// Exit code of bad input or usage.
 const EXIT_ERROR: u8 = 2;
-/// Exit code of a build that wrote everything with some hub mesh goals unmet.
+/// Exit code of a build that wrote what it could make with some goals unmet.
 const EXIT_UNMET: u8 = 3;
 
 fn main() -> ExitCode {
@@ -103,13 +103,18 @@ fn run(cli: &Cli) -> Result<ExitCode> {
             let out = outcome.out.display();
             if args.strict {
                 eprintln!(
-                    "error: {} hub mesh goal(s) not met (--strict): {goals}; the files are in {out}",
+                    "error: {} goal(s) not met (--strict): {goals}; the files are in {out}",
                     outcome.unmet.len()
                 );
                 Ok(ExitCode::from(EXIT_ERROR))
             } else {
+                let written = if outcome.partial {
+                    "the hub mesh, the frame and the report were written to"
+                } else {
+                    "everything was built and written to"
+                };
                 eprintln!(
-                    "warning: {} hub mesh goal(s) not met: {goals}; everything was built and written to {out} (exit code {EXIT_UNMET})",
+                    "warning: {} goal(s) not met: {goals}; {written} {out} (exit code {EXIT_UNMET})",
                     outcome.unmet.len()
                 );
                 Ok(ExitCode::from(EXIT_UNMET))

@@ -271,23 +271,59 @@ pub(crate) fn parallel_map<T: Send>(n: usize, f: impl Fn(usize) -> T + Sync + Se
 
 /// The collision shape of `part` (a representative), as a jagua-rs item in coordinates
 /// centred on the shape, with the lower bound's area and a check that it fits some sheet.
+/// The grown outline is simplified outward (rounds become sharp corners, notches are
+/// filled), which can make it a little longer than the part: where that stand-in fits no
+/// sheet, the outline as flattened is tried, then with every round kept, so that a part as
+/// long as the sheet's margins allow is not refused for its stand-in.
 fn make_kind(part: &Part, p: &Polyline<f64>, kind: usize, setup: &Setup) -> Result<Kind, String> {
     let lb_area = shape::grown(p, setup.half_spacing).area();
     let g = shape::grown(p, setup.grow);
     // the rounds of grown corners become sharp corners when that adds little
     let tiny = 1e-4 * g.area();
-    let mut poly = shape::flatten_outside(&g, setup.tolerance, tiny);
-    let budget = SIMPLIFY * polygon_area(&poly);
-    let filled = shape::simplify_outside(&poly, budget);
-    if shape::is_simple(&filled) {
-        poly = filled;
-    } else if !shape::is_simple(&poly) {
-        // the grown outline nearly touches itself (a gap narrower than the chord
-        // tolerance): its convex hull is simple and still holds it
-        poly = shape::convex_hull(&poly);
+    let flattened = shape::flatten_outside(&g, setup.tolerance, tiny);
+    let budget = SIMPLIFY * polygon_area(&flattened);
+    let filled = shape::simplify_outside(&flattened, budget);
+    let first = if shape::is_simple(&filled) {
+        filled
+    } else {
+        flattened.clone()
+    };
+    for poly in [Some(first), Some(flattened), None] {
+        let poly = poly.unwrap_or_else(|| shape::flatten_outside(&g, setup.tolerance, 0.0));
+        let poly = if shape::is_simple(&poly) {
+            poly
+        } else {
+            // the grown outline nearly touches itself (a gap narrower than the chord
+            // tolerance): its convex hull is simple and still holds it
+            shape::convex_hull(&poly)
+        };
+        if let Some(made) = stand_in(part, &poly, kind, setup, lb_area)? {
+            return Ok(made);
+        }
     }
-    let c = centroid(&poly);
-    let (lo, hi) = crate::part::bbox(&poly);
+    let (olo, ohi) = p
+        .extents()
+        .map(|e| ([e.min_x, e.min_y], [e.max_x, e.max_y]))
+        .unwrap_or(([0.0; 2], [0.0; 2]));
+    let s = 2.0 * setup.half_spacing;
+    Err(NestError::TooLarge {
+        part: part.id.clone(),
+        width: ohi[0] - olo[0] + s,
+        height: ohi[1] - olo[1] + s,
+    }
+    .to_string())
+}
+
+/// [`make_kind`] with the grown outline `poly`; `None` where it fits no sheet.
+fn stand_in(
+    part: &Part,
+    poly: &[[f64; 2]],
+    kind: usize,
+    setup: &Setup,
+    lb_area: f64,
+) -> Result<Option<Kind>, String> {
+    let c = centroid(poly);
+    let (lo, hi) = crate::part::bbox(poly);
     let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
     let mut pts: Vec<Point> = poly
         .iter()
@@ -322,19 +358,9 @@ fn make_kind(part: &Part, p: &Polyline<f64>, kind: usize, setup: &Setup) -> Resu
         })
     });
     if !fits {
-        let (olo, ohi) = p
-            .extents()
-            .map(|e| ([e.min_x, e.min_y], [e.max_x, e.max_y]))
-            .unwrap_or(([0.0; 2], [0.0; 2]));
-        let s = 2.0 * setup.half_spacing;
-        return Err(NestError::TooLarge {
-            part: part.id.clone(),
-            width: ohi[0] - olo[0] + s,
-            height: ohi[1] - olo[1] + s,
-        }
-        .to_string());
+        return Ok(None);
     }
-    Ok(Kind {
+    Ok(Some(Kind {
         item: Arc::new(item),
         rich: OnceLock::new(),
         orig,
@@ -342,7 +368,7 @@ fn make_kind(part: &Part, p: &Polyline<f64>, kind: usize, setup: &Setup) -> Resu
         lb_area,
         area,
         centre: c,
-    })
+    }))
 }
 
 /// Area centroid of a polygon.

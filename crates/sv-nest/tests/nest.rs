@@ -513,3 +513,48 @@ fn esicup_fu_far_above_lbf_with_a_fixed_budget() {
     // seeds 0-2)
     assert!(res.density * 100.0 > 85.0, "density {}", res.density);
 }
+
+#[test]
+fn a_part_as_long_as_the_margins_allow_is_nested() {
+    // A strip's ends are the pointed corners of its tiles. Grown by half the spacing and
+    // simplified, a pointed end gets a sharp tip instead of its round, 1.2 mm further
+    // out: a part 0.6 mm short of the sheet's length inside its margins was refused as
+    // larger than every sheet (a 20 x 12 m dome's strip). A part 0.3 mm short must be
+    // placed, inside the margins (checked on the outline); the rounds of its stand-in
+    // are flattened outward within 0.05 mm.
+    let opts = small_opts();
+    let long = 600.0 - 2.0 * opts.margin - 0.3;
+    let diamond = Part::new(
+        "diamond",
+        Contour::polygon(&[
+            [0.0, 40.0],
+            [40.0, 0.0],
+            [long - 40.0, 0.0],
+            [long, 40.0],
+            [long - 40.0, 80.0],
+            [40.0, 80.0],
+        ]),
+    );
+    let parts = vec![diamond];
+    let report = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+    check_report(&parts, &report, &opts, &[]);
+    assert_eq!(report.sheets.len(), 1);
+    // a millimetre longer does not fit, and is named
+    let longer = Part::new(
+        "longer",
+        Contour::polygon(&[
+            [0.0, 40.0],
+            [40.0, 0.0],
+            [long - 38.7, 0.0],
+            [long + 1.3, 40.0],
+            [long - 38.7, 80.0],
+            [40.0, 80.0],
+        ]),
+    );
+    let parts = vec![longer];
+    let report = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+    check_report(&parts, &report, &opts, &["longer"]);
+    assert!(report.left_out[0]
+        .reason
+        .contains("larger than every sheet"));
+}

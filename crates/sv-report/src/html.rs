@@ -292,7 +292,7 @@ fn quality_table(input: &ReportInput<'_>) -> String {
             ),
         ));
         if !m.unmet.is_empty() {
-            rows.push(("hub mesh goals not met".into(), m.unmet.join("; ")));
+            rows.push(("goals not met".into(), m.unmet.join("; ")));
         }
     }
     let mut h =

@@ -44,7 +44,8 @@ impl Summary {
     pub fn of(input: &ReportInput<'_>) -> Self {
         let strips = &input.strips.strips;
         let thickness = input.strips.params.profile.thickness;
-        let steel_area_mm2: f64 = strips.iter().map(|s| s.area_mm2).sum();
+        // folded from +0, not summed (from -0): a build without strips shows 0, not -0
+        let steel_area_mm2 = strips.iter().map(|s| s.area_mm2).fold(0.0, |a, x| a + x);
         let necks: HashSet<[usize; 2]> = strips
             .iter()
             .flat_map(|s| &s.pins)
@@ -64,7 +65,7 @@ impl Summary {
             steel_area_mm2,
             thickness_mm: thickness,
             steel_mass_kg: steel_area_mm2 * thickness * 1e-9 * STEEL_DENSITY,
-            cut_length_mm: strips.iter().map(strip_cut_length).sum(),
+            cut_length_mm: strips.iter().map(strip_cut_length).fold(0.0, |a, x| a + x),
             pierces: strips.iter().map(strip_pierces).sum(),
             hub_welds,
             primary_welds,
