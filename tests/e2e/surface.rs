@@ -177,6 +177,13 @@ fn parts_that_cannot_be_cut_leave_the_mesh_frame_and_report_and_exit_3() {
             .any(|l| l.as_str().unwrap().starts_with("no strips cut: ")),
         "{report}"
     );
+    // `check DIR` says where to look; the frame alone can be checked
+    let check = dir.run(&["check", "o"]);
+    check.expect_code(2);
+    assert!(
+        check.one_error_line().contains("that build cut no strips"),
+        "{check:?}"
+    );
     let html = std::fs::read_to_string(dir.join("o/report.html")).unwrap();
     assert!(
         html.contains("no strips cut: "),

@@ -16,7 +16,17 @@ pub fn run(args: &CheckArgs) -> Result<bool> {
     let (name, report) = if args.frame.is_dir() {
         let dir = &args.frame;
         let frame = read_frame(&dir.join("frame.json"))?;
-        let mut strips = read_strips(&dir.join("strips.json"))?;
+        let strips_json = dir.join("strips.json");
+        if !strips_json.exists() {
+            // a build whose strips could not be cut writes the frame alone
+            bail!(
+                "{}: no such file: that build cut no strips (its report.json says why); \
+                 `spinvalence check {}` checks the frame alone",
+                strips_json.display(),
+                dir.join("frame.json").display()
+            );
+        }
+        let mut strips = read_strips(&strips_json)?;
         for note in cuts_from_dxf(dir, &mut strips)? {
             eprintln!("note: {note}");
         }
