@@ -97,17 +97,18 @@ fn unmet_goals_still_build_everything_and_exit_3() {
     assert!(dir.join("s/mesh.obj").exists());
 }
 
-/// A hub mesh whose parts cannot be cut (the arched tent at 150 mm: its faces bend so far
-/// from planar that two tiles of a strip overlap too little for a bridge) still gives the
-/// user the hub mesh, the frame and the report to look at, with the strips stage's reason
-/// among the unmet goals, and exit 3; nothing of an earlier build in the directory is left
-/// to pass for this one's parts.
+/// A hub mesh whose parts cannot be cut (here: a sheet too short for one tile) still gives
+/// the user the hub mesh, the frame and the report to look at, with the strips stage's
+/// reason among the unmet goals, and exit 3; nothing of an earlier build in the directory
+/// is left to pass for this one's parts.
 #[test]
 fn parts_that_cannot_be_cut_leave_the_mesh_frame_and_report_and_exit_3() {
     let dir = Dir::new();
-    let target = fixtures::path("targets/arched_tent.obj")
-        .display()
-        .to_string();
+    std::fs::write(
+        dir.join("short.toml"),
+        "[joints]\nclose = false\n[strips]\nmax_length = 250\n",
+    )
+    .unwrap();
     // an earlier build's parts in the output directory
     std::fs::create_dir_all(dir.join("o/strips")).unwrap();
     std::fs::create_dir_all(dir.join("o/sheets")).unwrap();
@@ -122,10 +123,10 @@ fn parts_that_cannot_be_cut_leave_the_mesh_frame_and_report_and_exit_3() {
     }
     let out = dir.run(&[
         "build",
+        "--config",
+        "short.toml",
         "--target",
-        &target,
-        "--unit-size",
-        "150",
+        "builtin:flat",
         "--out",
         "o",
     ]);
@@ -136,7 +137,8 @@ fn parts_that_cannot_be_cut_leave_the_mesh_frame_and_report_and_exit_3() {
         .find(|l| l.starts_with("warning: ") && l.contains("exit code 3"))
         .unwrap_or_else(|| panic!("{out:?}"));
     assert!(
-        warning.contains("no strips cut: profile: strip ")
+        warning.contains("no strips cut: strips: ")
+            && warning.contains("more than max_length 250")
             && warning.contains("the hub mesh, the frame and the report were written"),
         "{warning}"
     );
@@ -454,4 +456,71 @@ fn automatic_layouts_build_through_to_the_sheets() {
             check.expect_code(1);
         }
     }
+}
+
+/// Where the joints are left open (here: laps no sheet can weld at 150 mm) and two units of
+/// a strip face each other too little for a bridge (the arched tent's faces are far from
+/// planar), the strip ends there instead of the build refusing the parts: the summary
+/// names those units, and in frame.json they belong to different strips while every unit
+/// is in exactly one strip of strips.json.
+#[test]
+fn a_bridge_that_cannot_be_cut_ends_its_strip() {
+    let dir = Dir::new();
+    let target = fixtures::path("targets/arched_tent.obj")
+        .display()
+        .to_string();
+    let out = dir.run(&[
+        "build",
+        "--target",
+        &target,
+        "--unit-size",
+        "150",
+        "--out",
+        "o",
+        "--nest-evaluations",
+        "20000",
+        "--nest-seconds",
+        "3600",
+    ]);
+    out.expect_code(3);
+    let row = out
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("strips "))
+        .unwrap_or_else(|| panic!("{out:?}"));
+    let (_, named) = row
+        .split_once("bridges could not be cut (facing sides overlap too little): the strips end there, welded on site (")
+        .unwrap_or_else(|| panic!("{row}"));
+    let frame = read_json(&dir.join("o/frame.json"));
+    let strip_of = |id: &str| -> String {
+        let unit = frame["units"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|u| u["id"] == id)
+            .unwrap_or_else(|| panic!("no unit {id}"));
+        unit["strip"].as_str().unwrap().to_string()
+    };
+    let pairs: Vec<(&str, &str)> = named
+        .trim_end_matches(')')
+        .split("; ")
+        .filter(|p| *p != "...")
+        .map(|p| p.split_once(" - ").unwrap())
+        .collect();
+    assert!(!pairs.is_empty(), "{row}");
+    for (a, b) in pairs {
+        assert_ne!(strip_of(a), strip_of(b), "{a} and {b} in one strip");
+    }
+    let strips = read_json(&dir.join("o/strips.json"));
+    let mut seen = vec![0usize; frame["units"].as_array().unwrap().len()];
+    for s in strips["strips"].as_array().unwrap() {
+        for u in s["units"].as_array().unwrap() {
+            seen[u.as_u64().unwrap() as usize] += 1;
+        }
+    }
+    assert!(
+        seen.iter().all(|&n| n == 1),
+        "a unit not in exactly one strip"
+    );
+    assert!(dir.join("o/nest.json").exists());
 }

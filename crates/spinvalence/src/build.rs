@@ -739,16 +739,29 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     if !args.quiet {
         let mut rows = summary_head(&report, &frame, &timings);
         // the stage rows go before the last two (timings and total)
-        let mut stage_rows = vec![vec![
-            "strips".into(),
-            format!(
-                "{} (longest {}, worst pin bend {:.1} deg, twist {:.1} deg)",
-                stage.strips.len(),
-                number(stage.strips.iter().map(|s| s.size[0]).fold(0.0, f64::max)) + " mm",
-                stage.worst_pin.0.to_degrees(),
-                stage.worst_pin.1.to_degrees()
-            ),
-        ]];
+        let mut strips_row = format!(
+            "{} (longest {}, worst pin bend {:.1} deg, twist {:.1} deg)",
+            stage.strips.len(),
+            number(stage.strips.iter().map(|s| s.size[0]).fold(0.0, f64::max)) + " mm",
+            stage.worst_pin.0.to_degrees(),
+            stage.worst_pin.1.to_degrees()
+        );
+        if !stage.breaks.is_empty() {
+            let named: Vec<String> = stage
+                .breaks
+                .iter()
+                .take(3)
+                .map(|&units| link_name(&frame, units))
+                .collect();
+            strips_row.push_str(&format!(
+                "; {} bridges could not be cut (facing sides overlap too little): the strips \
+                 end there, welded on site ({}{})",
+                stage.breaks.len(),
+                named.join("; "),
+                if stage.breaks.len() > 3 { "; ..." } else { "" }
+            ));
+        }
+        let mut stage_rows = vec![vec!["strips".into(), strips_row]];
         stage_rows.extend(sheets::summary_rows(&nested.report, cfg.nest.seconds));
         let report_path = cfg.out.join("report.html").display().to_string();
         stage_rows.extend(report::summary_rows(&report_stage, &report_path));

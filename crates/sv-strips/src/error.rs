@@ -32,6 +32,18 @@ pub enum StripsError {
         /// What is wrong.
         why: String,
     },
+    /// Two consecutive units of a strip whose facing sides, as cut, overlap too little for
+    /// a bridge of the profile's neck width: the strip can end there instead
+    /// ([`crate::StripOptions::breaks`]).
+    #[error("strip {strip}, unit {}: facing sides overlap too little for a bridge of width {width} to unit {}", units[1], units[0])]
+    NoBridge {
+        /// Strip id.
+        strip: String,
+        /// The two units, in strip order.
+        units: [usize; 2],
+        /// The bridge's width (the profile's neck width, mm).
+        width: f64,
+    },
     /// More strips than the id scheme `A01`..`Z99` can name.
     #[error("{count} strips, but ids run out after Z99 (2574 strips)")]
     TooManyStrips {

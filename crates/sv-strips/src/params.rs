@@ -62,6 +62,11 @@ pub struct StripOptions {
     /// (mm^2). Consecutive tiles touch along their joint line (area 0); 1e-3 mm^2 is far below
     /// anything a cutter resolves and far above rounding noise.
     pub overlap_area_tolerance: f64,
+    /// Consecutive units (frame unit indices, either order) between which a strip ends
+    /// although a bridge could join them: where the profile found their facing sides too
+    /// short for one ([`StripsError::NoBridge`]), they are welded on site instead.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub breaks: Vec<[usize; 2]>,
 }
 
 impl Default for StripOptions {
@@ -71,11 +76,19 @@ impl Default for StripOptions {
             max_length: DEFAULT_SHEET_LENGTH - 2.0 * DEFAULT_SHEET_MARGIN,
             split: SplitRule::Fill,
             overlap_area_tolerance: 1e-3,
+            breaks: Vec::new(),
         }
     }
 }
 
 impl StripOptions {
+    /// Whether a strip must end between units `a` and `b` ([`StripOptions::breaks`]).
+    pub fn breaks_between(&self, a: usize, b: usize) -> bool {
+        self.breaks
+            .iter()
+            .any(|&[x, y]| [x, y] == [a, b] || [x, y] == [b, a])
+    }
+
     /// Check the options; the error names the bad option.
     pub fn validate(&self) -> Result<(), StripsError> {
         if !(self.max_length.is_finite() && self.max_length > 0.0) {

@@ -448,14 +448,11 @@ pub fn profile_strip(
             let hw = params.neck_width / 2.0;
             let (lo, hi) = (a0.max(b0) + hw + r, a1.min(b1) - hw - r);
             if lo > hi {
-                return Err(unit_error(
-                    &strip.id,
-                    pin.units[1],
-                    format!(
-                        "facing sides overlap too little for a bridge of width {} to unit {}",
-                        params.neck_width, pin.units[0]
-                    ),
-                ));
+                return Err(StripsError::NoBridge {
+                    strip: strip.id.clone(),
+                    units: pin.units,
+                    width: params.neck_width,
+                });
             }
             let t = (pin.point - o).dot(&u).clamp(lo, hi);
             let c = o + u * t;

@@ -629,7 +629,7 @@ fn split_chain(
         })?;
         let (placed, pin) = place_next(tiles, f, &last, k, g, m);
         // a joint the frame welds is where a strip ends
-        let welded = tiles.joints[f][k].is_some_and(|j| !j.bridge);
+        let welded = tiles.joints[f][k].is_some_and(|j| !j.bridge) || options.breaks_between(f, g);
         let fits = !welded
             && piece
                 .overlap(&placed, options.overlap_area_tolerance)
