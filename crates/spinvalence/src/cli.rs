@@ -84,7 +84,8 @@ Built-in targets: builtin:flat, builtin:vault, builtin:dome, builtin:saddle, bui
 Writes DIR/mesh.obj (hub mesh), frame.json, frame.obj, strips.json, strips/ (one DXF and one
 SVG per strip), nest.json and sheets/ (the strips nested on plasma sheets: one DXF and one
 SVG per sheet), report.html (the build report: open it in a browser, it needs no network),
-bom.csv (one row per strip), report.json and timings.json, all or nothing.
+bom.csv (one row per strip), report.json and timings.json, all or nothing (where the strips
+cannot be cut: the hub mesh, frame and report only, exit code 3).
 `spinvalence build --print-config` prints a config file with every default.
 
 Exit codes: 0 every goal met; 3 built and written, but some goals are not met (the hub
