@@ -390,6 +390,15 @@ fn relief_for(
                 let back = base - dir * CLEARANCE;
                 for k in 0..BEND_RUNS {
                     let elbow = centre + left * mid + dir * (reach + k as Real * BEND_STEP);
+                    // no run after this lead is shorter than the best, or none keeps the
+                    // rules: the turns need not be tried
+                    let lead = [back, elbow];
+                    let no_shorter = best
+                        .as_ref()
+                        .is_some_and(|b| (elbow - back).norm() >= b.length());
+                    if no_shorter || lead_breaks_rules(lead, half, &rules) {
+                        continue;
+                    }
                     for turn in 0..DIRECTIONS {
                         let run = rules.run([elbow, elbow], 0.0, direction(turn), half, 0.0);
                         if let Some(outline) = run {
@@ -411,6 +420,51 @@ fn relief_for(
         }
     }
     None
+}
+
+/// Whether a bent notch's lead run alone breaks a rule that [`fits`] holds every notch to
+/// (under the upper plate, a web to a slot or to a relief already cut, a hub neck's room):
+/// then no run after it fits, whichever way it turns.
+fn lead_breaks_rules(lead: [Point2; 2], half: Real, rules: &Rules) -> bool {
+    let notch = Notch {
+        outline: [lead[1]; 4],
+        half,
+        lead: Some(lead),
+    };
+    let Some(band) = notch.lead_band() else {
+        return false;
+    };
+    if rules.under_upper(&band) {
+        return true;
+    }
+    let web = rules.widths.slot / 2.0 + rules.min_web;
+    let near_slot = rules.lower.layout.slot_paths.iter().any(|path| {
+        path.windows(2)
+            .any(|w| notch.lead_apart(&w[0], &w[1]) < web)
+    });
+    let near_relief = rules.existing.iter().any(|r| {
+        let other = r.notch();
+        let [a0, b0, c0, d0] = other.outline;
+        let back = other.back();
+        let mut d = notch.lead_apart(&back, &back) - other.half;
+        for (p, q) in [(a0, b0), (b0, c0), (c0, d0)] {
+            d = d.min(notch.lead_apart(&p, &q));
+        }
+        if let Some(b) = other.lead_band() {
+            for i in 0..4 {
+                d = d.min(notch.lead_apart(&b[i], &b[(i + 1) % 4]));
+            }
+        }
+        d < rules.min_web
+    });
+    let near_neck = rules
+        .lower
+        .layout
+        .pins()
+        .hub
+        .iter()
+        .any(|p| notch.lead_apart(p, p) <= neck_room(rules.widths));
+    near_slot || near_relief || near_neck
 }
 
 /// Whether `notch` keeps the rules: not under the upper plate (or under its edge by at most
