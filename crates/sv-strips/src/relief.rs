@@ -422,6 +422,25 @@ fn relief_for(
     None
 }
 
+/// The distance from a notch to `other`, a relief already cut, by `apart` (the notch's
+/// distance to a segment, or to a point where both ends are one): to the round of its
+/// closed end, the sides of its open run and its lead run's band.
+fn distance_to(other: &Relief, apart: impl Fn(&Point2, &Point2) -> Real) -> Real {
+    let notch = other.notch();
+    let [a0, b0, c0, d0] = notch.outline;
+    let back = notch.back();
+    let mut d = apart(&back, &back) - notch.half;
+    for (p, q) in [(a0, b0), (b0, c0), (c0, d0)] {
+        d = d.min(apart(&p, &q));
+    }
+    if let Some(band) = notch.lead_band() {
+        for i in 0..4 {
+            d = d.min(apart(&band[i], &band[(i + 1) % 4]));
+        }
+    }
+    d
+}
+
 /// Whether a bent notch's lead run alone breaks a rule that [`fits`] holds every notch to
 /// (under the upper plate, a web to a slot or to a relief already cut, a hub neck's room):
 /// then no run after it fits, whichever way it turns.
@@ -442,21 +461,10 @@ fn lead_breaks_rules(lead: [Point2; 2], half: Real, rules: &Rules) -> bool {
         path.windows(2)
             .any(|w| notch.lead_apart(&w[0], &w[1]) < web)
     });
-    let near_relief = rules.existing.iter().any(|r| {
-        let other = r.notch();
-        let [a0, b0, c0, d0] = other.outline;
-        let back = other.back();
-        let mut d = notch.lead_apart(&back, &back) - other.half;
-        for (p, q) in [(a0, b0), (b0, c0), (c0, d0)] {
-            d = d.min(notch.lead_apart(&p, &q));
-        }
-        if let Some(b) = other.lead_band() {
-            for i in 0..4 {
-                d = d.min(notch.lead_apart(&b[i], &b[(i + 1) % 4]));
-            }
-        }
-        d < rules.min_web
-    });
+    let near_relief = rules
+        .existing
+        .iter()
+        .any(|r| distance_to(r, |p, q| notch.lead_apart(p, q)) < rules.min_web);
     let near_neck = rules
         .lower
         .layout
@@ -500,26 +508,11 @@ fn fits(notch: &Notch, rules: &Rules) -> bool {
             }
         }
     }
-    let apart_from = |r: &Relief| {
-        let other = r.notch();
-        let [a0, b0, c0, d0] = other.outline;
-        let back = other.back();
-        let mut d = notch.apart(&back, &back) - other.half;
-        for (p, q) in [(a0, b0), (b0, c0), (c0, d0)] {
-            d = d.min(notch.apart(&p, &q));
-        }
-        if let Some(band) = other.lead_band() {
-            for i in 0..4 {
-                d = d.min(notch.apart(&band[i], &band[(i + 1) % 4]));
-            }
-        }
-        d
-    };
     runs == 1
         && rules
             .existing
             .iter()
-            .all(|r| apart_from(r) >= rules.min_web)
+            .all(|r| distance_to(r, |p, q| notch.apart(p, q)) >= rules.min_web)
         && lower.layout.pins().hub.iter().all(|p| {
             let [s, e] = [notch.back(), notch.end()];
             point_segment_distance(xy(p), xy(&s), xy(&e)) - notch.half > neck_room(widths)
