@@ -8,7 +8,12 @@ use crate::util::{read_json, Dir};
 /// The wave canopy (z = 350 sin(x/1000) cos(y/1400), 6 x 4 m): its four-sided layout cannot
 /// follow the curvature lines, so planarity is unmet (docs/secondary.md).
 fn unmet() -> String {
-    fixtures::path("targets/wave_canopy.obj")
+    target("wave_canopy")
+}
+
+/// `fixtures/targets/NAME.obj` as a command-line argument.
+fn target(name: &str) -> String {
+    fixtures::path(&format!("targets/{name}.obj"))
         .display()
         .to_string()
 }
@@ -389,9 +394,7 @@ fn quad_obj_counts(text: &str) -> (Vec<usize>, Vec<bool>, usize) {
 fn automatic_layouts_build_through_to_the_sheets() {
     let dir = Dir::new();
     for (name, valence3, loops) in [("rounded_triangle", 1, 1), ("annulus_roof", 0, 2)] {
-        let target = fixtures::path(&format!("targets/{name}.obj"))
-            .display()
-            .to_string();
+        let target = target(name);
         let out = dir.run(&[
             "build",
             "--target",
@@ -466,9 +469,7 @@ fn automatic_layouts_build_through_to_the_sheets() {
 #[test]
 fn a_bridge_that_cannot_be_cut_ends_its_strip() {
     let dir = Dir::new();
-    let target = fixtures::path("targets/arched_tent.obj")
-        .display()
-        .to_string();
+    let target = target("arched_tent");
     let out = dir.run(&[
         "build",
         "--target",

@@ -53,7 +53,7 @@ pub fn run(
             );
         }
     }
-    let open = frame.links.iter().all(|l| l.joint.is_none());
+    let open = !frame.joints_closed();
     let mut options = options.clone();
     let mut round = 0;
     let (strips, profiled) = loop {

@@ -439,7 +439,7 @@ fn check_joints(
     expanded: &[Option<[Point3; 4]>],
     slot: &dyn Fn(usize, usize, usize) -> Option<usize>,
 ) -> Vec<Worst> {
-    if frame.links.iter().all(|l| l.joint.is_none()) {
+    if !frame.joints_closed() {
         return Vec::new();
     }
     let thickness = frame.params.thickness.unwrap_or(0.0);

@@ -33,6 +33,14 @@ pub struct FrameFile {
     pub solve: Option<SolveSummary>,
 }
 
+impl FrameFile {
+    /// Whether its joints were closed (`links[].joint` recorded): bridges and welds are
+    /// then the frame's, and the parts as cut are measured on them.
+    pub fn joints_closed(&self) -> bool {
+        self.links.iter().any(|l| l.joint.is_some())
+    }
+}
+
 /// Design parameters (`params`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrameParams {

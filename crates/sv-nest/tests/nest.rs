@@ -524,34 +524,26 @@ fn a_part_as_long_as_the_margins_allow_is_nested() {
     // are flattened outward within 0.05 mm.
     let opts = small_opts();
     let long = 600.0 - 2.0 * opts.margin - 0.3;
-    let diamond = Part::new(
-        "diamond",
-        Contour::polygon(&[
-            [0.0, 40.0],
-            [40.0, 0.0],
-            [long - 40.0, 0.0],
-            [long, 40.0],
-            [long - 40.0, 80.0],
-            [40.0, 80.0],
-        ]),
-    );
-    let parts = vec![diamond];
+    // a strip `length` long with pointed ends, 80 mm wide
+    let pointed = |id: &str, length: f64| {
+        Part::new(
+            id,
+            Contour::polygon(&[
+                [0.0, 40.0],
+                [40.0, 0.0],
+                [length - 40.0, 0.0],
+                [length, 40.0],
+                [length - 40.0, 80.0],
+                [40.0, 80.0],
+            ]),
+        )
+    };
+    let parts = vec![pointed("diamond", long)];
     let report = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
     check_report(&parts, &report, &opts, &[]);
     assert_eq!(report.sheets.len(), 1);
     // a millimetre longer does not fit, and is named
-    let longer = Part::new(
-        "longer",
-        Contour::polygon(&[
-            [0.0, 40.0],
-            [40.0, 0.0],
-            [long - 38.7, 0.0],
-            [long + 1.3, 40.0],
-            [long - 38.7, 80.0],
-            [40.0, 80.0],
-        ]),
-    );
-    let parts = vec![longer];
+    let parts = vec![pointed("longer", long + 1.3)];
     let report = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
     check_report(&parts, &report, &opts, &["longer"]);
     assert!(report.left_out[0]

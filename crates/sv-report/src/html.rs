@@ -224,7 +224,7 @@ fn summary_section(input: &ReportInput<'_>, s: &Summary) -> String {
 /// plates as cut (a bridge's sides from its fold line, a weld's plates apart, thickness
 /// included), else the primary gap of the expanded tiles; and what it is called.
 fn link_gaps(frame: &sv_frame::FrameFile) -> (Vec<f64>, &'static str) {
-    if frame.links.iter().any(|l| l.joint.is_some()) {
+    if frame.joints_closed() {
         let gaps = frame
             .links
             .iter()

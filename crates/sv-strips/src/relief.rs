@@ -77,7 +77,7 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
     let (Some(widths), Some(thickness)) = (frame.params.cut, frame.params.thickness) else {
         return Ok(());
     };
-    if frame.links.iter().all(|l| l.joint.is_none()) {
+    if !frame.joints_closed() {
         return Ok(());
     }
     let min_web = relief_web(&widths).max(crate::params::min_web(thickness));
