@@ -137,20 +137,22 @@ pub fn bbox(pts: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
 /// Whether `p` is inside the closed polygon `poly` (even-odd rule; points on an edge may
 /// count either way).
 pub fn point_in_polygon(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
-    let mut inside = false;
     let n = poly.len();
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[(i + 1) % n]);
-        if (a[1] > p[1]) != (b[1] > p[1]) {
-            // exact: is p left of the upward edge (right of a downward one)?
-            let up = b[1] > a[1];
-            let o = orientation(a, b, p);
-            if (up && o > 0) || (!up && o < 0) {
-                inside = !inside;
-            }
-        }
+    (0..n).fold(false, |inside, i| {
+        inside != ray_crosses(p, poly[i], poly[(i + 1) % n])
+    })
+}
+
+/// Whether the ray from `p` towards +x crosses the edge `a`-`b`: what
+/// [`point_in_polygon`] counts. Only edges that straddle `p`'s height can.
+pub fn ray_crosses(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
+    if (a[1] > p[1]) == (b[1] > p[1]) {
+        return false;
     }
-    inside
+    // exact: is p left of the upward edge (right of a downward one)?
+    let up = b[1] > a[1];
+    let o = orientation(a, b, p);
+    (up && o > 0) || (!up && o < 0)
 }
 
 /// Distance from `p` to the boundary of the closed polygon `poly`.

@@ -5,8 +5,10 @@
 
 use std::collections::HashMap;
 
+use rayon::prelude::*;
+
 use sv_frame::plates::{edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut};
-use sv_frame::{CheckReport, FrameFile, Worst};
+use sv_frame::{CheckReport, FrameFile, LinkRecord, Worst};
 use sv_geom::{planar, segment_closest, Point2, Point3, Real, Vector3};
 
 use crate::leg_plate::{flat, lift, place, posed_leg, section_in_plate, section_inside, Placed};
@@ -62,11 +64,72 @@ fn p3(a: &[Real; 3]) -> Point3 {
     Point3::new(a[0], a[1], a[2])
 }
 
+/// One cut of a unit (a slot with its reliefs), flat, flattened to a closed polyline, with
+/// its bounding box: most points a check asks about lie far outside most cuts.
+struct Cut {
+    ring: Vec<[Real; 2]>,
+    lo: [Real; 2],
+    hi: [Real; 2],
+}
+
+impl Cut {
+    fn new(ring: Vec<[Real; 2]>) -> Self {
+        let (lo, hi) = planar::bbox(&ring);
+        Self { ring, lo, hi }
+    }
+
+    /// Distance from `p` to the bounding box (0 inside it): no point of the cut is closer.
+    fn box_distance(&self, p: [Real; 2]) -> Real {
+        let dx = (self.lo[0] - p[0]).max(p[0] - self.hi[0]).max(0.0);
+        let dy = (self.lo[1] - p[1]).max(p[1] - self.hi[1]).max(0.0);
+        dx.hypot(dy)
+    }
+
+    fn contains(&self, p: [Real; 2]) -> bool {
+        self.box_distance(p) == 0.0 && planar::point_in_polygon(p, &self.ring)
+    }
+
+    /// The edges that straddle the height `y`: the only ones [`planar::point_in_polygon`]
+    /// counts for a point there, so that a row of points is tested against them alone
+    /// ([`inside_row`]).
+    fn straddling(&self, y: Real) -> Vec<([Real; 2], [Real; 2])> {
+        if y < self.lo[1] || y > self.hi[1] {
+            return Vec::new();
+        }
+        let n = self.ring.len();
+        (0..n)
+            .map(|i| (self.ring[i], self.ring[(i + 1) % n]))
+            .filter(|(a, b)| (a[1] > y) != (b[1] > y))
+            .collect()
+    }
+
+    /// The distance from `p` to the cut's outline where it is below `below`, else `below`.
+    fn distance_below(&self, p: [Real; 2], below: Real) -> Real {
+        if self.box_distance(p) >= below {
+            below
+        } else {
+            below.min(planar::boundary_distance(p, &self.ring))
+        }
+    }
+}
+
+/// Whether `p` is inside the cut whose edges at its height are `straddling`
+/// ([`Cut::straddling`]).
+fn inside_row(p: [Real; 2], straddling: &[([Real; 2], [Real; 2])]) -> bool {
+    straddling.iter().fold(false, |inside, (a, b)| {
+        inside != planar::ray_crosses(p, *a, *b)
+    })
+}
+
 /// The narrowest web between two different slots of a unit near `near`: its centre and
 /// width. `slots` are the unit's slot contours flattened to closed polylines.
-fn narrowest_web(slots: &[Vec<[Real; 2]>], near: Point2, radius: Real) -> Option<(Point2, Real)> {
+fn narrowest_web(slots: &[Cut], near: Point2, radius: Real) -> Option<(Point2, Real)> {
     let at = [near.x, near.y];
-    let segments = |s: &Vec<[Real; 2]>| -> Vec<([Real; 2], [Real; 2])> {
+    let segments = |c: &Cut| -> Vec<([Real; 2], [Real; 2])> {
+        if c.box_distance(at) > radius {
+            return Vec::new();
+        }
+        let s = &c.ring;
         (0..s.len())
             .map(|i| (s[i], s[(i + 1) % s.len()]))
             .filter(|(a, b)| planar::point_segment_distance(at, *a, *b) <= radius)
@@ -132,8 +195,8 @@ struct Folded {
     placed: Placed,
     /// Its legs as plates (`leg_plate::posed_leg`) on its necks as cut, in the world.
     legs: [Option<[Point3; 4]>; 4],
-    /// Its cuts as cut (slots, with their reliefs), flat, flattened to closed polylines.
-    slots: Vec<Vec<[Real; 2]>>,
+    /// Its cuts as cut (slots, with their reliefs), flat.
+    slots: Vec<Cut>,
 }
 
 /// Fold-check a build: `strips` cut from `frame`. Rows: necks where frame.json pins them,
@@ -155,36 +218,45 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     let mut folded: HashMap<usize, Folded> = HashMap::new();
     let mut strip_of: HashMap<usize, usize> = HashMap::new();
     let mut unrebuilt = 0.0;
-    for (si, strip) in strips.strips.iter().enumerate() {
-        for (j, tile) in strip.flat.iter().enumerate() {
-            let u = tile.unit;
-            let name = || {
-                frame
-                    .units
-                    .get(u)
-                    .map_or(format!("unit {u}"), |r| format!("unit {}", r.id))
-            };
-            strip_of.insert(u, si);
-            match fold_unit(frame, strip, j, &widths) {
-                Ok((f, necks)) => {
-                    for (what, err) in necks.pin_offsets {
-                        pins.see(err, || format!("{} {what}", name()));
-                    }
-                    for (k, err) in necks.leg_errors.iter().enumerate() {
-                        legs.see(*err, || format!("{} leg {k}", name()));
-                    }
-                    if let Some(hp) = frame.units[u].hub_plate {
-                        let off = (0..4)
-                            .map(|k| (f.placed.hub_plate[k] - p3(&hp[k])).norm())
-                            .fold(0.0, Real::max);
-                        plates.see(off, name);
-                    }
-                    folded.insert(u, f);
+    // every unit folded on its own (in parallel), the figures seen in strip order
+    let tiles: Vec<(usize, &StripRecord, usize)> = strips
+        .strips
+        .iter()
+        .enumerate()
+        .flat_map(|(si, strip)| (0..strip.flat.len()).map(move |j| (si, strip, j)))
+        .collect();
+    let rebuilt_units: Vec<_> = tiles
+        .par_iter()
+        .map(|&(_, strip, j)| fold_unit(frame, strip, j, &widths))
+        .collect();
+    for (&(si, strip, j), result) in tiles.iter().zip(rebuilt_units) {
+        let u = strip.flat[j].unit;
+        let name = || {
+            frame
+                .units
+                .get(u)
+                .map_or(format!("unit {u}"), |r| format!("unit {}", r.id))
+        };
+        strip_of.insert(u, si);
+        match result {
+            Ok((f, necks)) => {
+                for (what, err) in necks.pin_offsets {
+                    pins.see(err, || format!("{} {what}", name()));
                 }
-                Err(why) => {
-                    unrebuilt += 1.0;
-                    rebuilt.see(unrebuilt, || format!("{}: {why}", name()));
+                for (k, err) in necks.leg_errors.iter().enumerate() {
+                    legs.see(*err, || format!("{} leg {k}", name()));
                 }
+                if let Some(hp) = frame.units[u].hub_plate {
+                    let off = (0..4)
+                        .map(|k| (f.placed.hub_plate[k] - p3(&hp[k])).norm())
+                        .fold(0.0, Real::max);
+                    plates.see(off, name);
+                }
+                folded.insert(u, f);
+            }
+            Err(why) => {
+                unrebuilt += 1.0;
+                rebuilt.see(unrebuilt, || format!("{}: {why}", name()));
             }
         }
     }
@@ -234,65 +306,46 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         crate::relief::UNDER_EDGE + limits.collision,
     );
     let thickness = params.thickness;
-    for (li, link) in frame.links.iter().enumerate() {
-        let [a, b] = link.units;
-        let (Some(fa), Some(fb), Some([k, m])) = (folded.get(&a), folded.get(&b), link.slots)
-        else {
+    // every link measured on its own (in parallel), the figures seen in link order
+    let measured: Vec<Option<AtLink>> = frame
+        .links
+        .par_iter()
+        .map(|link| {
+            let [a, b] = link.units;
+            let (fa, fb) = (folded.get(&a)?, folded.get(&b)?);
+            let between_strips = strip_of.get(&a) != strip_of.get(&b);
+            measure_link(link, fa, fb, between_strips, thickness)
+        })
+        .collect();
+    for (li, (link, m)) in frame.links.iter().zip(measured).enumerate() {
+        let Some(m) = m else {
             continue;
         };
+        let [a, b] = link.units;
         let at = || format!("link {li} ({} - {})", frame.units[a].id, frame.units[b].id);
-        let ca = centroid(&fa.placed.hub_plate);
-        let cb = centroid(&fb.placed.hub_plate);
-        let dir = (cb - ca).normalize();
-        let lap = (fa.placed.hub_plate[k] - fb.placed.hub_plate[m]).dot(&dir);
-        laps.see(lap, at);
-        claims.see((lap - link.hub_overlap).abs(), at);
+        laps.see(m.lap, at);
+        claims.see((m.lap - link.hub_overlap).abs(), at);
         if let Some((length, row)) = &mut one_lap {
-            row.see((lap - *length).abs(), at);
+            row.see((m.lap - *length).abs(), at);
         }
-        for (f, g) in [(fa, fb), (fb, fa)] {
-            let mut upper = false;
-            for leg in f.legs.iter().flatten() {
-                let section = section_in_plate(leg, &g.placed, thickness);
-                // a leg of f runs down through g's plate: f's plate is the upper one
-                upper |= section.len() >= 3;
-                legs_through.see(into_steel(&section, &g.placed.layout.hub, &g.slots), at);
+        for (depths, under) in &m.legs_through {
+            for depth in depths {
+                legs_through.see(*depth, at);
             }
-            if upper {
-                under_upper.see(cut_under(&f.placed, &g.placed, &g.slots), at);
+            if let Some(under) = under {
+                under_upper.see(*under, at);
             }
         }
-        if let Some((low, high)) = lap_heights(&fa.placed.hub_plate, &fb.placed.hub_plate) {
-            // how far the two slabs are from lying one on the other (0 when one does), and
-            // the widest gap between them over the lap
-            let into = (thickness - low).min(high + thickness).max(0.0);
+        if let Some((into, widest)) = m.stacking {
             through.see(into, at);
-            let widest = if low >= thickness {
-                high - thickness
-            } else if high <= -thickness {
-                -low - thickness
-            } else {
-                // once stacked, touching at one end: the wedge
-                high - low
-            };
             stacked.see(widest, at);
         }
-        // the plates as cut (shortened at their ends where a bridge joins): no facing side
-        // reaches into the other plate, between strips nor across a bridge's joint slot
-        let (pa, pb) = (&fa.plate, &fb.plate);
-        let depth = facing_reach(pa, k, pb, m, thickness);
-        if strip_of.get(&a) == strip_of.get(&b) {
-            rims.see(depth, at);
-        } else {
-            collisions.see(depth, at);
-            // welded where the frame says, else where the sides come closest
-            let (ta, tb) = (&fa.tile, &fb.tile);
-            let s = link.joint.map_or_else(
-                || segment_closest(&ta[k], &ta[(k + 1) % 4], &tb[m], &tb[(m + 1) % 4]).s,
-                |j| j.along[0],
-            );
-            let w = ta[k] + (ta[(k + 1) % 4] - ta[k]) * s;
-            welds.see(edge_to_plate(pa, &w, pb, thickness).norm(), at);
+        match m.weld {
+            None => rims.see(m.depth, at),
+            Some(weld) => {
+                collisions.see(m.depth, at);
+                welds.see(weld, at);
+            }
         }
     }
     let mut span = Worst::max("bridge length folded - flat (mm)", limits.bridge_span);
@@ -338,32 +391,41 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
             round.entry(v).or_default().push(u);
         }
     }
-    // in unit order, so that of equal depths the same leg is named on every run
+    // in unit order, so that of equal depths the same leg is named on every run; each
+    // unit's legs measured on its own (in parallel)
     let mut units: Vec<usize> = folded.keys().copied().collect();
     units.sort_unstable();
-    for u in units {
-        let (f, Some(face)) = (&folded[&u], frame.mesh.faces.get(u)) else {
-            continue;
-        };
-        let mut near: Vec<usize> = face.iter().flat_map(|v| round[v].iter().copied()).collect();
-        near.sort_unstable();
-        near.dedup();
-        for (k, leg) in f.legs.iter().enumerate() {
-            let Some(leg) = leg else {
-                continue;
+    let reaches: Vec<Vec<(usize, usize, Real)>> = units
+        .par_iter()
+        .map(|&u| {
+            let (f, Some(face)) = (&folded[&u], frame.mesh.faces.get(u)) else {
+                return Vec::new();
             };
-            for &w in near.iter().filter(|&&w| w != u) {
-                let Some(g) = folded.get(&w) else {
+            let mut near: Vec<usize> = face.iter().flat_map(|v| round[v].iter().copied()).collect();
+            near.sort_unstable();
+            near.dedup();
+            let mut depths = Vec::new();
+            for (k, leg) in f.legs.iter().enumerate() {
+                let Some(leg) = leg else {
                     continue;
                 };
-                let depth = rim_reach(leg, &g.plate, widths.rim, thickness);
-                legs_rims.see(depth, || {
-                    format!(
-                        "unit {} leg {k} into {}",
-                        frame.units[u].id, frame.units[w].id
-                    )
-                });
+                for &w in near.iter().filter(|&&w| w != u) {
+                    if let Some(g) = folded.get(&w) {
+                        depths.push((k, w, rim_reach(leg, &g.plate, widths.rim, thickness)));
+                    }
+                }
             }
+            depths
+        })
+        .collect();
+    for (&u, depths) in units.iter().zip(reaches) {
+        for (k, w, depth) in depths {
+            legs_rims.see(depth, || {
+                format!(
+                    "unit {} leg {k} into {}",
+                    frame.units[u].id, frame.units[w].id
+                )
+            });
         }
     }
     let one_lap = one_lap.map(|(_, row)| row);
@@ -390,6 +452,86 @@ fn centroid(q: &[Point3; 4]) -> Point3 {
     Point3::from(q.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / 4.0)
 }
 
+/// What the two units of a link, folded, show there.
+struct AtLink {
+    /// The hub lap along the line between the hub plates' centroids.
+    lap: Real,
+    /// Per unit of the link (a on b, then b on a): how deep each of its legs runs into the
+    /// other's hub plate outside its cuts, and, where a leg runs through it (the unit's
+    /// plate lies above), how deep the other's cuts reach under its hub plate.
+    legs_through: [(Vec<Real>, Option<Real>); 2],
+    /// How far the two hub plates are from lying one on the other, and the widest gap
+    /// between them over the lap.
+    stacking: Option<(Real, Real)>,
+    /// How deep one facing primary plate reaches into the other.
+    depth: Real,
+    /// Between strips: the gap at the weld point; `None` across a bridge's joint slot.
+    weld: Option<Real>,
+}
+
+/// The figures of `link` between the folded units `fa` and `fb`; `None` where the link has
+/// no slots.
+fn measure_link(
+    link: &LinkRecord,
+    fa: &Folded,
+    fb: &Folded,
+    between_strips: bool,
+    thickness: Real,
+) -> Option<AtLink> {
+    let [k, m] = link.slots?;
+    let ca = centroid(&fa.placed.hub_plate);
+    let cb = centroid(&fb.placed.hub_plate);
+    let dir = (cb - ca).normalize();
+    let lap = (fa.placed.hub_plate[k] - fb.placed.hub_plate[m]).dot(&dir);
+    let legs_through = [(fa, fb), (fb, fa)].map(|(f, g)| {
+        let mut upper = false;
+        let mut depths = Vec::with_capacity(4);
+        for leg in f.legs.iter().flatten() {
+            let section = section_in_plate(leg, &g.placed, thickness);
+            // a leg of f runs down through g's plate: f's plate is the upper one
+            upper |= section.len() >= 3;
+            depths.push(into_steel(&section, &g.placed.layout.hub, &g.slots));
+        }
+        let under = upper.then(|| cut_under(&f.placed, &g.placed, &g.slots));
+        (depths, under)
+    });
+    let stacking = lap_heights(&fa.placed.hub_plate, &fb.placed.hub_plate).map(|(low, high)| {
+        // how far the two slabs are from lying one on the other (0 when one does), and the
+        // widest gap between them over the lap
+        let into = (thickness - low).min(high + thickness).max(0.0);
+        let widest = if low >= thickness {
+            high - thickness
+        } else if high <= -thickness {
+            -low - thickness
+        } else {
+            // once stacked, touching at one end: the wedge
+            high - low
+        };
+        (into, widest)
+    });
+    // the plates as cut (shortened at their ends where a bridge joins): no facing side
+    // reaches into the other plate, between strips nor across a bridge's joint slot
+    let (pa, pb) = (&fa.plate, &fb.plate);
+    let depth = facing_reach(pa, k, pb, m, thickness);
+    // between strips welded where the frame says, else where the sides come closest
+    let weld = between_strips.then(|| {
+        let (ta, tb) = (&fa.tile, &fb.tile);
+        let s = link.joint.map_or_else(
+            || segment_closest(&ta[k], &ta[(k + 1) % 4], &tb[m], &tb[(m + 1) % 4]).s,
+            |j| j.along[0],
+        );
+        let w = ta[k] + (ta[(k + 1) % 4] - ta[k]) * s;
+        edge_to_plate(pa, &w, pb, thickness).norm()
+    });
+    Some(AtLink {
+        lap,
+        legs_through,
+        stacking,
+        depth,
+        weld,
+    })
+}
+
 /// What the necks of one unit show.
 struct Necks {
     /// Per neck (`hub neck j` / `rim neck j`): distance between the neck as cut, folded,
@@ -412,12 +554,12 @@ fn fold_unit(
     let placed = place(frame, u, &flat, widths)?;
     let (hub, primary) = (placed.hub, placed.primary);
     let unit = &frame.units[u];
-    let slots: Vec<Vec<[Real; 2]>> = strip
+    let slots: Vec<Cut> = strip
         .cuts
         .iter()
         .zip(&strip.cut_units)
         .filter(|(_, &cu)| cu == u)
-        .map(|(c, _)| c.flatten(0.002))
+        .map(|(c, _)| Cut::new(c.flatten(0.002)))
         .collect();
     if slots.len() != 4 {
         return Err(format!(
@@ -516,20 +658,26 @@ fn bridge(
 
 /// How deep the flat convex polygon `section` lies in a plate's steel: inside `outline`
 /// and outside every cut of `cuts` (closed polylines). Sampled every half millimetre.
-fn into_steel(section: &[Point2], outline: &[Point2; 4], cuts: &[Vec<[Real; 2]>]) -> Real {
+fn into_steel(section: &[Point2], outline: &[Point2; 4], cuts: &[Cut]) -> Real {
     if section.len() < 3 {
         return 0.0;
     }
     let outline = flat(outline);
-    let depth = |p: [Real; 2]| {
-        if cuts.iter().any(|c| planar::point_in_polygon(p, c)) {
-            return 0.0;
+    // a point's depth is its distance to the outline and to every cut, 0 inside a cut; the
+    // deepest so far bounds the rest: a point that comes nearer than that to the outline or
+    // a cut cannot be deeper, and is left there
+    sample(&flat(section), 0.5).fold(0.0, |deepest, p| {
+        let depth = cuts
+            .iter()
+            .try_fold(planar::boundary_distance(p, &outline), |d, c| {
+                let d = c.distance_below(p, d);
+                (d > deepest).then_some(d)
+            });
+        match depth {
+            Some(d) if !cuts.iter().any(|c| c.contains(p)) => d,
+            _ => deepest,
         }
-        cuts.iter()
-            .map(|c| planar::boundary_distance(p, c))
-            .fold(planar::boundary_distance(p, &outline), Real::min)
-    };
-    sample(&flat(section), 0.5).map(depth).fold(0.0, Real::max)
+    })
 }
 
 /// The corners of the flat polygon `ring`, and the points of a grid `step` apart inside it.
@@ -539,10 +687,35 @@ fn sample(ring: &[[Real; 2]], step: Real) -> impl Iterator<Item = [Real; 2]> + '
         ((hi[0] - lo[0]) / step).ceil() as usize,
         ((hi[1] - lo[1]) / step).ceil() as usize,
     );
-    let grid = (0..=nx).flat_map(move |i| (0..=ny).map(move |j| (i, j)));
-    grid.map(move |(i, j)| [lo[0] + i as Real * step, lo[1] + j as Real * step])
-        .filter(|p| planar::point_in_polygon(*p, ring))
+    // row by row, only between the row's first and last crossing of the ring (a step
+    // wider each way, for the rounding of the crossings) can a point be inside
+    let rows = (0..=ny).flat_map(move |j| {
+        let y = lo[1] + j as Real * step;
+        let (from, to) = row_span(ring, y);
+        let first = ((from - step - lo[0]) / step).floor().max(0.0);
+        let last = ((to + step - lo[0]) / step).ceil().min(nx as Real);
+        let columns = if first <= last {
+            first as usize..last as usize + 1
+        } else {
+            0..0
+        };
+        columns.map(move |i| [lo[0] + i as Real * step, y])
+    });
+    rows.filter(|p| planar::point_in_polygon(*p, ring))
         .chain(ring.iter().copied())
+}
+
+/// The least and greatest x where the line at height `y` crosses the edges of `ring` that
+/// straddle it (as [`planar::point_in_polygon`] counts them); an empty span where none does.
+fn row_span(ring: &[[Real; 2]], y: Real) -> (Real, Real) {
+    let n = ring.len();
+    (0..n)
+        .map(|i| (ring[i], ring[(i + 1) % n]))
+        .filter(|(a, b)| (a[1] > y) != (b[1] > y))
+        .map(|(a, b)| a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]))
+        .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        })
 }
 
 /// How deep the cuts of `lower`'s hub plate (`cuts`, flat: its slots with their reliefs)
@@ -550,7 +723,7 @@ fn sample(ring: &[[Real; 2]], step: Real) -> impl Iterator<Item = [Real; 2]> + '
 /// plates (0.2 mm inside the lower one's outline, past the round-off of its slots) that a
 /// cut took out, from the upper plate's edge, on a quarter-millimetre grid and the cuts'
 /// outlines.
-fn cut_under(upper: &Placed, lower: &Placed, cuts: &[Vec<[Real; 2]>]) -> Real {
+fn cut_under(upper: &Placed, lower: &Placed, cuts: &[Cut]) -> Real {
     let to_lower = lower.hub.inverse();
     let mut up: [Point2; 4] = std::array::from_fn(|i| {
         let q = to_lower * upper.hub_plate[i];
@@ -568,14 +741,29 @@ fn cut_under(upper: &Placed, lower: &Placed, cuts: &[Vec<[Real; 2]>]) -> Real {
     // point of a cut lies on its outline)
     let outlines = cuts
         .iter()
-        .flatten()
+        .flat_map(|c| &c.ring)
         .filter(|p| planar::point_in_polygon(**p, &lap))
         .copied();
-    sample(&lap, 0.25)
-        .filter(|p| cuts.iter().any(|c| planar::point_in_polygon(*p, c)))
-        .chain(outlines)
+    // a point is looked for in the cuts only where it would be deeper than the deepest so far
+    // (the grid comes row by row: the cuts' edges at a row are found once)
+    let mut row: (Real, Vec<Vec<_>>) = (Real::NAN, Vec::new());
+    let grid = sample(&lap, 0.25).fold(0.0, |deepest, p| {
+        let d = planar::boundary_distance(p, &edge);
+        if d <= deepest {
+            return deepest;
+        }
+        if row.0 != p[1] {
+            row = (p[1], cuts.iter().map(|c| c.straddling(p[1])).collect());
+        }
+        if row.1.iter().any(|edges| inside_row(p, edges)) {
+            d
+        } else {
+            deepest
+        }
+    });
+    outlines
         .map(|p| planar::boundary_distance(p, &edge))
-        .fold(0.0, Real::max)
+        .fold(grid, Real::max)
 }
 
 /// How deep the leg plate `leg` runs into the rim of the primary plate `plate` (as cut,
@@ -588,5 +776,82 @@ fn rim_reach(leg: &[Point3; 4], plate: &[Point3; 4], rim: Real, thickness: Real)
     let Some(open) = sv_unit::inset(&outline, rim) else {
         return 0.0;
     };
-    into_steel(&inside, &outline, &[flat(&open)])
+    into_steel(&inside, &outline, &[Cut::new(flat(&open))])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every point of the grid inside `ring`, tested one by one.
+    fn every_grid_point(ring: &[[Real; 2]], step: Real) -> Vec<[Real; 2]> {
+        let (lo, hi) = planar::bbox(ring);
+        let nx = ((hi[0] - lo[0]) / step).ceil() as usize;
+        let ny = ((hi[1] - lo[1]) / step).ceil() as usize;
+        let mut inside = Vec::new();
+        for i in 0..=nx {
+            for j in 0..=ny {
+                let p = [lo[0] + i as Real * step, lo[1] + j as Real * step];
+                if planar::point_in_polygon(p, ring) {
+                    inside.push(p);
+                }
+            }
+        }
+        inside
+    }
+
+    fn sorted(mut points: Vec<[Real; 2]>) -> Vec<[Real; 2]> {
+        points.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        points
+    }
+
+    #[test]
+    fn the_row_by_row_sample_finds_every_grid_point_inside() {
+        // a thin sliver at 45 degrees (a hub lap), a concave L with a notch, and a ring
+        // whose vertices lie on the grid's rows
+        let sliver = [[0.0, 0.0], [40.0, 40.0], [41.3, 38.7], [1.3, -1.3]];
+        let l = [
+            [0.0, 0.0],
+            [20.0, 0.0],
+            [20.0, 5.0],
+            [5.0, 5.0],
+            [5.0, 20.0],
+            [2.0, 12.0],
+            [0.0, 20.0],
+        ];
+        let on_rows = [[0.0, 0.0], [10.0, 0.5], [3.0, 4.0], [7.25, 2.0]];
+        for (ring, step) in [(&sliver[..], 0.25), (&l[..], 0.5), (&on_rows[..], 0.25)] {
+            let found: Vec<_> = sample(ring, step).collect();
+            let (grid, corners) = found.split_at(found.len() - ring.len());
+            assert_eq!(corners, ring);
+            let brute = every_grid_point(ring, step);
+            assert!(brute.len() > 20, "{} points", brute.len());
+            assert_eq!(sorted(grid.to_vec()), sorted(brute));
+        }
+    }
+
+    #[test]
+    fn a_cut_row_by_row_holds_the_points_the_whole_ring_does() {
+        let ring: Vec<[Real; 2]> = (0..90)
+            .map(|k| {
+                let t = k as Real / 90.0 * std::f64::consts::TAU;
+                let r = 10.0 + 3.0 * (5.0 * t).sin();
+                [r * t.cos(), r * t.sin()]
+            })
+            .collect();
+        let cut = Cut::new(ring.clone());
+        let mut inside = 0;
+        for j in -60..=60 {
+            let y = j as Real * 0.25;
+            let edges = cut.straddling(y);
+            for i in -60..=60 {
+                let p = [i as Real * 0.25, y];
+                let whole = planar::point_in_polygon(p, &ring);
+                assert_eq!(inside_row(p, &edges), whole, "{p:?}");
+                assert_eq!(cut.contains(p), whole, "{p:?}");
+                inside += usize::from(whole);
+            }
+        }
+        assert!(inside > 1000, "{inside}");
+    }
 }
