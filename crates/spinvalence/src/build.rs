@@ -473,95 +473,15 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     // where no sheet's laps reach the weld minimum the joint solve cannot make them (it
     // lifts short laps by a few mm, not by tens), so the joints are left open
     let (mesh, solved, joints) = if cfg.joints.close && options.unweldable.is_none() {
-        let frame0 = solved.to_frame_file(&mesh);
-        let surface = sv_surface::TargetSurface::new(&target, &mesh)
-            .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
-        let p = &cfg.profile;
-        let overlap = cfg
-            .frame
-            .overlap_target(&solved.evaluation.overlaps, min_overlap)?;
-        let (short, long) = sv_surface::Goals::default().side_range;
-        let unit = cfg.secondary.unit_size;
-        let joint_options = sv_frame::JointOptions {
-            max_iterations: cfg.joints.max_iterations,
-            split_iterations: cfg.joints.split_iterations,
+        let (mesh, solved, joint_report) = close_the_joints(
+            args,
+            &mut cfg,
+            &mut options,
+            &target,
+            (mesh, solved),
+            &mut report,
             min_overlap,
-            overlap,
-            face_sides: Some((short * unit, long * unit)),
-            limits: p.joint_limits(),
-            bridge_width: p.neck_width,
-            bridge_room: 2.0 * p.neck_width,
-            thickness: p.thickness,
-            ..sv_frame::JointOptions::default()
-        };
-        // the strips' direction decides which joints are bridges: unless the command line
-        // names one, both are tried and the one whose joints hold better is kept
-        let first = cfg.strips.direction;
-        let directions = if cfg.joints.both_directions && args.strip_direction.is_none() {
-            vec![first, other_direction(first)]
-        } else {
-            vec![first]
-        };
-        // the directions are solved side by side (each is deterministic on its own; the
-        // best is chosen in the order above), their bars drawn together
-        let bars = indicatif::MultiProgress::new();
-        let attempts: Vec<Result<(JointScore, sv_strips::StripDirection, Closed)>> = directions
-            .par_iter()
-            .map(|&direction| {
-                let strip_options = sv_strips::StripOptions {
-                    direction,
-                    ..options.strips.clone()
-                };
-                let plan = sv_strips::strip_plan(&frame0, &strip_options)
-                    .map_err(|e| anyhow!("{}: strips: {e}", cfg.target))?;
-                let joint_options = sv_frame::JointOptions {
-                    pieces: plan.pieces,
-                    ..joint_options.clone()
-                };
-                let what = format!("joints, strips along {}", direction_name(direction));
-                let bar = progress_bar(args.quiet, joint_options.max_iterations, &what);
-                let bar = if bar.is_hidden() { bar } else { bars.add(bar) };
-                let closed = sv_frame::close_joints(
-                    &mesh,
-                    &solved,
-                    &surface,
-                    &plan.bridges,
-                    &joint_options,
-                    &mut |it, energy| {
-                        // rounds after bridges are split run past the planned iterations
-                        if it as u64 > bar.length().unwrap_or(0) {
-                            bar.set_length((it + joint_options.split_iterations) as u64);
-                        }
-                        bar.set_position(it as u64);
-                        bar.set_message(format!("residual {energy:.3e}"));
-                    },
-                );
-                finish(&bar);
-                let closed =
-                    closed.map_err(|e| anyhow!("{}: closing the joints: {e}", cfg.target))?;
-                let score = JointScore::of(&closed, &joint_options.limits, min_overlap);
-                Ok((score, direction, closed))
-            })
-            .collect();
-        let mut best: Option<(JointScore, sv_strips::StripDirection, Closed)> = None;
-        for attempt in attempts {
-            let (score, direction, closed) = attempt?;
-            if best.as_ref().is_none_or(|(s, _, _)| score.better_than(s)) {
-                best = Some((score, direction, closed));
-            }
-        }
-        let (_, direction, (mesh, solved, joint_report)) =
-            best.expect("at least one direction is tried");
-        options.strips.direction = direction;
-        cfg.strips.direction = direction;
-        // the hub mesh moved: its goals are measured again (conicality, the paper's stand-in
-        // for tiles that can meet, is not held where the joints themselves are closed)
-        let index = sv_surface::TargetIndex::new(&target).map_err(|e| anyhow!("{e}"))?;
-        let mut again = sv_surface::measure_hub_mesh(&index, &mesh, cfg.secondary.unit_size)
-            .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
-        again.unmet.retain(|u| !u.starts_with("conical"));
-        again.iterations = report.iterations;
-        report = again;
+        )?;
         (mesh, solved, Some(joint_report))
     } else {
         (mesh, solved, None)
@@ -739,29 +659,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     if !args.quiet {
         let mut rows = summary_head(&report, &frame, &timings);
         // the stage rows go before the last two (timings and total)
-        let mut strips_row = format!(
-            "{} (longest {}, worst pin bend {:.1} deg, twist {:.1} deg)",
-            stage.strips.len(),
-            number(stage.strips.iter().map(|s| s.size[0]).fold(0.0, f64::max)) + " mm",
-            stage.worst_pin.0.to_degrees(),
-            stage.worst_pin.1.to_degrees()
-        );
-        if !stage.breaks.is_empty() {
-            let named: Vec<String> = stage
-                .breaks
-                .iter()
-                .take(3)
-                .map(|&units| link_name(&frame, units))
-                .collect();
-            strips_row.push_str(&format!(
-                "; {} bridges could not be cut (facing sides overlap too little): the strips \
-                 end there, welded on site ({}{})",
-                stage.breaks.len(),
-                named.join("; "),
-                if stage.breaks.len() > 3 { "; ..." } else { "" }
-            ));
-        }
-        let mut stage_rows = vec![vec!["strips".into(), strips_row]];
+        let mut stage_rows = vec![vec!["strips".into(), strips_row(&stage, &frame)]];
         stage_rows.extend(sheets::summary_rows(&nested.report, cfg.nest.seconds));
         let report_path = cfg.out.join("report.html").display().to_string();
         stage_rows.extend(report::summary_rows(&report_stage, &report_path));
@@ -775,6 +673,44 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
             crate::check::render(&fold)
         ))?;
     }
+    Ok(Outcome {
+        unmet: report.unmet.clone(),
+        out: cfg.out.clone(),
+        fold_warning: fold_warning(&fold),
+        partial: false,
+    })
+}
+
+/// The summary's `strips` row: how many, the longest, the worst pin bend and twist, and
+/// the bridges that could not be cut.
+fn strips_row(stage: &strips::StripsStage, frame: &sv_frame::FrameFile) -> String {
+    let mut row = format!(
+        "{} (longest {}, worst pin bend {:.1} deg, twist {:.1} deg)",
+        stage.strips.len(),
+        number(stage.strips.iter().map(|s| s.size[0]).fold(0.0, f64::max)) + " mm",
+        stage.worst_pin.0.to_degrees(),
+        stage.worst_pin.1.to_degrees()
+    );
+    if !stage.breaks.is_empty() {
+        let named: Vec<String> = stage
+            .breaks
+            .iter()
+            .take(3)
+            .map(|&units| link_name(frame, units))
+            .collect();
+        row.push_str(&format!(
+            "; {} bridges could not be cut (facing sides overlap too little): the strips \
+             end there, welded on site ({}{})",
+            stage.breaks.len(),
+            named.join("; "),
+            if stage.breaks.len() > 3 { "; ..." } else { "" }
+        ));
+    }
+    row
+}
+
+/// The fold check's failing rows as one warning line, if any fails.
+fn fold_warning(fold: &sv_frame::CheckReport) -> Option<String> {
     let failed: Vec<String> = fold
         .rows
         .iter()
@@ -789,19 +725,13 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
             )
         })
         .collect();
-    let fold_warning = (!failed.is_empty()).then(|| {
+    (!failed.is_empty()).then(|| {
         format!(
             "warning: fold check: {} of {} rows fail on the parts as cut: {}",
             failed.len(),
             fold.rows.len(),
             failed.join("; ")
         )
-    });
-    Ok(Outcome {
-        unmet: report.unmet.clone(),
-        out: cfg.out.clone(),
-        fold_warning,
-        partial: false,
     })
 }
 
@@ -865,6 +795,110 @@ fn write_without_strips(
 
 /// What closing the joints gives: the moved hub mesh, the frame on it, and the report.
 type Closed = (sv_frame::QuadMesh, sv_frame::Solved, sv_frame::JointReport);
+
+/// The joint solve of a build (`[joints] close`): the hub mesh and every unit's plates
+/// moved together so that the parts as cut meet, in the strips' direction the command line
+/// names or, unless it does, in the better of both. The strips' direction goes into `cfg`
+/// and `options`; `report` is measured again on the moved hub mesh.
+fn close_the_joints(
+    args: &BuildArgs,
+    cfg: &mut BuildConfig,
+    options: &mut StageOptions,
+    target: &TargetMesh,
+    (mesh, solved): (sv_frame::QuadMesh, sv_frame::Solved),
+    report: &mut SecondaryReport,
+    min_overlap: f64,
+) -> Result<Closed> {
+    let frame0 = solved.to_frame_file(&mesh);
+    let surface = sv_surface::TargetSurface::new(target, &mesh)
+        .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
+    let p = &cfg.profile;
+    let overlap = cfg
+        .frame
+        .overlap_target(&solved.evaluation.overlaps, min_overlap)?;
+    let (short, long) = sv_surface::Goals::default().side_range;
+    let unit = cfg.secondary.unit_size;
+    let joint_options = sv_frame::JointOptions {
+        max_iterations: cfg.joints.max_iterations,
+        split_iterations: cfg.joints.split_iterations,
+        min_overlap,
+        overlap,
+        face_sides: Some((short * unit, long * unit)),
+        limits: p.joint_limits(),
+        bridge_width: p.neck_width,
+        bridge_room: 2.0 * p.neck_width,
+        thickness: p.thickness,
+        ..sv_frame::JointOptions::default()
+    };
+    // the strips' direction decides which joints are bridges: unless the command line
+    // names one, both are tried and the one whose joints hold better is kept
+    let first = cfg.strips.direction;
+    let directions = if cfg.joints.both_directions && args.strip_direction.is_none() {
+        vec![first, other_direction(first)]
+    } else {
+        vec![first]
+    };
+    // the directions are solved side by side (each is deterministic on its own; the
+    // best is chosen in the order above), their bars drawn together
+    let bars = indicatif::MultiProgress::new();
+    let attempts: Vec<Result<(JointScore, sv_strips::StripDirection, Closed)>> = directions
+        .par_iter()
+        .map(|&direction| {
+            let strip_options = sv_strips::StripOptions {
+                direction,
+                ..options.strips.clone()
+            };
+            let plan = sv_strips::strip_plan(&frame0, &strip_options)
+                .map_err(|e| anyhow!("{}: strips: {e}", cfg.target))?;
+            let joint_options = sv_frame::JointOptions {
+                pieces: plan.pieces,
+                ..joint_options.clone()
+            };
+            let what = format!("joints, strips along {}", direction_name(direction));
+            let bar = progress_bar(args.quiet, joint_options.max_iterations, &what);
+            let bar = if bar.is_hidden() { bar } else { bars.add(bar) };
+            let closed = sv_frame::close_joints(
+                &mesh,
+                &solved,
+                &surface,
+                &plan.bridges,
+                &joint_options,
+                &mut |it, energy| {
+                    // rounds after bridges are split run past the planned iterations
+                    if it as u64 > bar.length().unwrap_or(0) {
+                        bar.set_length((it + joint_options.split_iterations) as u64);
+                    }
+                    bar.set_position(it as u64);
+                    bar.set_message(format!("residual {energy:.3e}"));
+                },
+            );
+            finish(&bar);
+            let closed = closed.map_err(|e| anyhow!("{}: closing the joints: {e}", cfg.target))?;
+            let score = JointScore::of(&closed, &joint_options.limits, min_overlap);
+            Ok((score, direction, closed))
+        })
+        .collect();
+    let mut best: Option<(JointScore, sv_strips::StripDirection, Closed)> = None;
+    for attempt in attempts {
+        let (score, direction, closed) = attempt?;
+        if best.as_ref().is_none_or(|(s, _, _)| score.better_than(s)) {
+            best = Some((score, direction, closed));
+        }
+    }
+    let (_, direction, (mesh, solved, joint_report)) =
+        best.expect("at least one direction is tried");
+    options.strips.direction = direction;
+    cfg.strips.direction = direction;
+    // the hub mesh moved: its goals are measured again (conicality, the paper's stand-in
+    // for tiles that can meet, is not held where the joints themselves are closed)
+    let index = sv_surface::TargetIndex::new(target).map_err(|e| anyhow!("{e}"))?;
+    let mut again = sv_surface::measure_hub_mesh(&index, &mesh, cfg.secondary.unit_size)
+        .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
+    again.unmet.retain(|u| !u.starts_with("conical"));
+    again.iterations = report.iterations;
+    *report = again;
+    Ok((mesh, solved, joint_report))
+}
 
 fn direction_name(d: sv_strips::StripDirection) -> &'static str {
     match d {
