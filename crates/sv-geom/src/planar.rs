@@ -146,13 +146,30 @@ pub fn point_in_polygon(p: [f64; 2], poly: &[[f64; 2]]) -> bool {
 /// Whether the ray from `p` towards +x crosses the edge `a`-`b`: what
 /// [`point_in_polygon`] counts. Only edges that straddle `p`'s height can.
 pub fn ray_crosses(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
-    if (a[1] > p[1]) == (b[1] > p[1]) {
+    if !straddles(a, b, p[1]) {
         return false;
     }
     // exact: is p left of the upward edge (right of a downward one)?
     let up = b[1] > a[1];
     let o = orientation(a, b, p);
     (up && o > 0) || (!up && o < 0)
+}
+
+/// Whether the edge `a`-`b` straddles the height `y` (one end above it, the other not).
+pub fn straddles(a: [f64; 2], b: [f64; 2], y: f64) -> bool {
+    (a[1] > y) != (b[1] > y)
+}
+
+/// The edges of the closed polygon `poly` that straddle the height `y`: the only ones
+/// [`point_in_polygon`] counts for a point there.
+pub fn straddling_edges(
+    poly: &[[f64; 2]],
+    y: f64,
+) -> impl Iterator<Item = ([f64; 2], [f64; 2])> + '_ {
+    let n = poly.len();
+    (0..n)
+        .map(move |i| (poly[i], poly[(i + 1) % n]))
+        .filter(move |(a, b)| straddles(*a, *b, y))
 }
 
 /// Distance from `p` to the boundary of the closed polygon `poly`.

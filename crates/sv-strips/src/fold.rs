@@ -96,11 +96,7 @@ impl Cut {
         if y < self.lo[1] || y > self.hi[1] {
             return Vec::new();
         }
-        let n = self.ring.len();
-        (0..n)
-            .map(|i| (self.ring[i], self.ring[(i + 1) % n]))
-            .filter(|(a, b)| (a[1] > y) != (b[1] > y))
-            .collect()
+        planar::straddling_edges(&self.ring, y).collect()
     }
 
     /// The distance from `p` to the cut's outline where it is below `below`, else `below`.
@@ -708,10 +704,7 @@ fn sample(ring: &[[Real; 2]], step: Real) -> impl Iterator<Item = [Real; 2]> + '
 /// The least and greatest x where the line at height `y` crosses the edges of `ring` that
 /// straddle it (as [`planar::point_in_polygon`] counts them); an empty span where none does.
 fn row_span(ring: &[[Real; 2]], y: Real) -> (Real, Real) {
-    let n = ring.len();
-    (0..n)
-        .map(|i| (ring[i], ring[(i + 1) % n]))
-        .filter(|(a, b)| (a[1] > y) != (b[1] > y))
+    planar::straddling_edges(ring, y)
         .map(|(a, b)| a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1]))
         .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), x| {
             (lo.min(x), hi.max(x))

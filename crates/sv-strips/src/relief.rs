@@ -172,20 +172,14 @@ impl Notch {
 
     /// The lead run's band (its square end's corners not rounded), or nothing.
     fn lead_band(&self) -> Option<[Point2; 4]> {
-        let [a, b] = self.lead?;
-        let along = (b - a).try_normalize(1e-12)?;
-        let left = Vector2::new(-along.y, along.x) * self.half;
-        Some([b + left, a + left, a - left, b - left])
+        lead_band(self.lead?, self.half)
     }
 
     /// The distance from the segment `p q` to the lead run's band (infinite without one;
     /// its round end is the open run's closed end).
     fn lead_apart(&self, p: &Point2, q: &Point2) -> Real {
-        self.lead_band().map_or(Real::INFINITY, |band| {
-            (0..4)
-                .map(|i| segment_distance(xy(&band[i]), xy(&band[(i + 1) % 4]), xy(p), xy(q)))
-                .fold(Real::INFINITY, Real::min)
-        })
+        self.lead_band()
+            .map_or(Real::INFINITY, |band| band_apart(&band, p, q))
     }
 
     /// The convex pieces it is made of, clockwise or counter-clockwise: the open run, its
@@ -441,16 +435,27 @@ fn distance_to(other: &Relief, apart: impl Fn(&Point2, &Point2) -> Real) -> Real
     d
 }
 
+/// The band of a lead run from `lead[0]` to `lead[1]`, `half` either side of it (its square
+/// end's corners not rounded); nothing for a run of no length.
+fn lead_band(lead: [Point2; 2], half: Real) -> Option<[Point2; 4]> {
+    let [a, b] = lead;
+    let along = (b - a).try_normalize(1e-12)?;
+    let left = Vector2::new(-along.y, along.x) * half;
+    Some([b + left, a + left, a - left, b - left])
+}
+
+/// The distance from the segment `p q` to the outline of `band`.
+fn band_apart(band: &[Point2; 4], p: &Point2, q: &Point2) -> Real {
+    (0..4)
+        .map(|i| segment_distance(xy(&band[i]), xy(&band[(i + 1) % 4]), xy(p), xy(q)))
+        .fold(Real::INFINITY, Real::min)
+}
+
 /// Whether a bent notch's lead run alone breaks a rule that [`fits`] holds every notch to
 /// (under the upper plate, a web to a slot or to a relief already cut, a hub neck's room):
 /// then no run after it fits, whichever way it turns.
 fn lead_breaks_rules(lead: [Point2; 2], half: Real, rules: &Rules) -> bool {
-    let notch = Notch {
-        outline: [lead[1]; 4],
-        half,
-        lead: Some(lead),
-    };
-    let Some(band) = notch.lead_band() else {
+    let Some(band) = lead_band(lead, half) else {
         return false;
     };
     if rules.under_upper(&band) {
@@ -459,19 +464,19 @@ fn lead_breaks_rules(lead: [Point2; 2], half: Real, rules: &Rules) -> bool {
     let web = rules.widths.slot / 2.0 + rules.min_web;
     let near_slot = rules.lower.layout.slot_paths.iter().any(|path| {
         path.windows(2)
-            .any(|w| notch.lead_apart(&w[0], &w[1]) < web)
+            .any(|w| band_apart(&band, &w[0], &w[1]) < web)
     });
     let near_relief = rules
         .existing
         .iter()
-        .any(|r| distance_to(r, |p, q| notch.lead_apart(p, q)) < rules.min_web);
+        .any(|r| distance_to(r, |p, q| band_apart(&band, p, q)) < rules.min_web);
     let near_neck = rules
         .lower
         .layout
         .pins()
         .hub
         .iter()
-        .any(|p| notch.lead_apart(p, p) <= neck_room(rules.widths));
+        .any(|p| band_apart(&band, p, p) <= neck_room(rules.widths));
     near_slot || near_relief || near_neck
 }
 

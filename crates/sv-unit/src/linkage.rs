@@ -106,6 +106,10 @@ impl Linkage {
                 .iter()
                 .fold(0.0, |a: Real, e| a.max(e.abs()))
         };
+        let merit =
+            |r: &Matrix3, p: &Vector3| self.leg_errors(r, p).iter().map(|e| e * e).sum::<Real>();
+        // the merit of the pose kept, carried over from the step that reached it
+        let mut now = merit(&r, &p);
         // a settling pose creeps where the legs are nearly singular: more, shorter steps,
         // to a tenth of the tolerance
         let (iterations, aim) = if reach.is_finite() {
@@ -116,12 +120,9 @@ impl Linkage {
         for it in 0..iterations {
             let mut c = nalgebra::Vector4::zeros();
             let mut jac = Matrix4x6::zeros();
-            // the leg errors here, as `leg_errors` gives them
-            let mut errors = [0.0; 4];
             for j in 0..4 {
                 let rh = r * self.hub[j];
                 let v = rh + p - self.rim[j];
-                errors[j] = v.norm() - self.length[j];
                 let l = self.length[j].max(1e-12);
                 // (|v|^2 - l^2) / 2l: the leg error to first order, smooth everywhere
                 c[j] = (v.norm_squared() - l * l) / (2.0 * l);
@@ -142,9 +143,6 @@ impl Linkage {
             // axis cases meet) one combination of the legs is stationary to first order,
             // and holds by symmetry. The regulariser grows until the step lowers the leg
             // errors (Levenberg).
-            let square_sum = |e: [Real; 4]| e.iter().map(|e| e * e).sum::<Real>();
-            let merit = |r: &Matrix3, p: &Vector3| square_sum(self.leg_errors(r, p));
-            let now = square_sum(errors);
             let jjt = jac * jac.transpose();
             let trace = jjt.trace().max(1e-300);
             let mut mu = 1e-12 * trace;
@@ -167,9 +165,11 @@ impl Linkage {
                 let omega = Vector3::new(step[0], step[1], step[2]) / size;
                 let rn = nalgebra::Rotation3::new(omega).into_inner() * r;
                 let pn = p + Vector3::new(step[3], step[4], step[5]);
-                if merit(&rn, &pn) < now {
+                let then = merit(&rn, &pn);
+                if then < now {
                     r = rn;
                     p = pn;
+                    now = then;
                     moved = true;
                     break;
                 }
