@@ -7,10 +7,17 @@ mesh written here is the mesh the Rust constructors build (up to the last bit of
 usage: make_meshes.py cap NX NY RADIUS SPACING OUT.obj
        make_meshes.py saddle NX NY SPACING R OUT.obj      # z = x^2/(2R) - y^2/(2R)
        make_meshes.py dome LX LY R1 R2 N OUT.obj          # a target (triangles), below
+       make_meshes.py wave_oval A B N OUT.obj             # a target (triangles), below
 
 `dome` writes a build target, not a hub mesh: the shallow dome z = -x^2/(2 R1) - y^2/(2 R2)
 over LX x LY mm in plan (principal radii R1 along x and R2 along y at the apex), as a
 triangle mesh of N x round(N LY / LX) grid cells, each split in two.
+
+`wave_oval` writes the wave canopy of the issue 16 suite, z = 350 sin(x/1000) cos(y/1400),
+over an ellipse of semi-axes A along x and B along y instead of a rectangle: the footprint
+has no corner, so the automatic layout is the O-grid with four valence-3 vertices (the
+10,000-face benchmark with singular vertices). Triangles between N concentric rings of
+6, 12, ... 6N points.
 """
 import math
 import sys
@@ -60,6 +67,35 @@ def dome(lx, ly, r1, r2, n):
     return verts, tris
 
 
+def wave_oval(a, b, n):
+    verts = [(0.0, 0.0, 0.0)]
+    rings = [[0]]
+    for k in range(1, n + 1):
+        ring = []
+        for i in range(6 * k):
+            t = 2 * math.pi * i / (6 * k)
+            x, y = a * k / n * math.cos(t), b * k / n * math.sin(t)
+            ring.append(len(verts))
+            verts.append((x, y, 350 * math.sin(x / 1000) * math.cos(y / 1400)))
+        rings.append(ring)
+    tris = []
+    for k in range(1, n + 1):
+        inner, outer = rings[k - 1], rings[k]
+        # walk both rings by angle, one triangle per step (counter-clockwise seen from +z)
+        m, big = len(inner), len(outer)
+        i = j = 0
+        while i < m or j < big:
+            if i == m or (m > 1 and j < big and (j + 1) / big <= (i + 1) / m) or m == 1:
+                tris.append((outer[j], outer[(j + 1) % big], inner[i % m]))
+                j += 1
+                if m == 1 and j == big:
+                    i = m
+            else:
+                tris.append((inner[i], outer[j % big], inner[(i + 1) % m]))
+                i += 1
+    return verts, tris
+
+
 def write(path, about, mesh):
     verts, faces = mesh
     with open(path, "w") as f:
@@ -86,6 +122,10 @@ def main(argv):
                                   float(argv[5]), int(argv[6]), argv[7])
         write(out, f"shallow dome {lx:g} x {ly:g} mm, principal radii {r1:g} and {r2:g} mm",
               dome(lx, ly, r1, r2, n))
+    elif kind == "wave_oval":
+        a, b, n, out = float(argv[2]), float(argv[3]), int(argv[4]), argv[5]
+        write(out, f"wave canopy z = 350 sin(x/1000) cos(y/1400) mm over an ellipse {a:g} x {b:g} mm",
+              wave_oval(a, b, n))
     else:
         sys.exit(__doc__)
 

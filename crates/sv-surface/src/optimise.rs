@@ -42,6 +42,14 @@ const BARRIER_WEIGHT: Real = 3.0;
 const SIDE_BARRIER: (Real, Real) = (1.03, 0.98);
 /// Weight of the face-side barrier.
 const SIDE_WEIGHT: Real = 2.0;
+/// A step that would move a vertex farther than this (fraction of the initial mean edge)
+/// is undoing the layout (the sheared faces an O-grid starts with round its irregular
+/// vertices ask for moves of 6-13 mean edges), not fitting it: while such steps are capped
+/// and taken whole and the merit falls, the cap (`max_step`) grows by REACH_GROWTH per
+/// iteration, up to REACH_MAX times `max_step`; otherwise it is `max_step`.
+const FAR_MOVE: Real = 0.5;
+const REACH_GROWTH: Real = 1.5;
+const REACH_MAX: Real = 10.0;
 
 fn push3(cols: &mut Vec<usize>, vals: &mut Vec<Real>, base: usize, v: &Vector3) {
     for k in 0..3 {
@@ -244,6 +252,9 @@ pub(crate) fn optimise_indexed(
         })
     });
     let w_side = if sides_in { SIDE_WEIGHT } else { 0.0 };
+    // the cap on a vertex's move in a step (see FAR_MOVE) and the merit of the last iterate
+    let mut reach = opts.max_step;
+    let mut last_merit = Real::INFINITY;
     for it in 0..opts.max_iterations {
         iterations = it + 1;
         let decay = (0.5f64).powf(it as Real / 10.0).max(0.1);
@@ -373,6 +384,10 @@ pub(crate) fn optimise_indexed(
             }
         }
         let m = merit(current_hard, far, &x);
+        if m > last_merit {
+            reach = opts.max_step;
+        }
+        last_merit = m;
         if m < (1.0 - STALL_GAIN) * mark {
             improved_at = it;
             mark = m;
@@ -488,11 +503,9 @@ pub(crate) fn optimise_indexed(
             )));
         }
         let max_move = (0..nv).map(|v| pos(&dx, v).norm()).fold(0.0, Real::max);
-        let mut step = if max_move > opts.max_step {
-            opts.max_step / max_move
-        } else {
-            1.0
-        };
+        let capped = max_move > reach;
+        let whole = if capped { reach / max_move } else { 1.0 };
+        let mut step = whole;
         let mut accepted = None;
         let mut why = String::new();
         for _ in 0..6 {
@@ -513,6 +526,11 @@ pub(crate) fn optimise_indexed(
                 }
             }
         }
+        reach = if capped && max_move > FAR_MOVE && accepted.is_some() && step == whole {
+            (reach * REACH_GROWTH).min(REACH_MAX * opts.max_step)
+        } else {
+            opts.max_step
+        };
         let Some(trial) = accepted else {
             // the goals conflict here: keep the last unfolded iterate and say where
             stopped = Some(format!(

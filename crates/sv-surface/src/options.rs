@@ -28,6 +28,8 @@ pub struct SecondaryOptions {
     /// Tikhonov regulariser toward the current iterate. Default 1e-4.
     pub regulariser: Real,
     /// Largest vertex move per iteration, as a fraction of the mean edge. Default 0.1.
+    /// While the steps ask for moves of more than half a mean edge (a layout being undone)
+    /// and are taken whole with the merit falling, the cap grows, up to ten times this.
     pub max_step: Real,
     /// Iteration limit. Default 100.
     pub max_iterations: usize,
