@@ -624,10 +624,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     let report_stage = report::run(&cfg.target, &frame, &stage.file, Some(nest_input), &report)?;
     let report_s = t4.elapsed().as_secs_f64();
 
-    let header = format!("spinvalence hub mesh of {}, mm, Z up", cfg.target);
-    let mesh_obj = sv_io::write_quad_obj(&mesh, &header);
-    let frame_obj = sv_io::frame_to_obj(&frame);
-    let frame_json = sv_io::frame_to_json(&frame);
+    let [mesh_obj, frame_obj, frame_json] = frame_texts(&cfg.target, &mesh, &frame);
     let report_json = serde_json::to_string_pretty(&report)?;
     let timings = Timings {
         secondary: secondary_s,
@@ -711,20 +708,7 @@ fn strips_row(stage: &strips::StripsStage, frame: &sv_frame::FrameFile) -> Strin
 
 /// The fold check's failing rows as one warning line, if any fails.
 fn fold_warning(fold: &sv_frame::CheckReport) -> Option<String> {
-    let failed: Vec<String> = fold
-        .rows
-        .iter()
-        .filter(|r| !r.ok)
-        .map(|r| {
-            format!(
-                "{} {} (limit {}) at {}",
-                r.name,
-                number(r.worst),
-                number(r.limit),
-                r.at
-            )
-        })
-        .collect();
+    let failed = crate::check::failures(fold);
     (!failed.is_empty()).then(|| {
         format!(
             "warning: fold check: {} of {} rows fail on the parts as cut: {}",
@@ -769,14 +753,14 @@ fn write_without_strips(
         &sv_strips::StripOptions::default(),
     );
     let html = report::run(&cfg.target, frame, &no_strips, None, report)?.html;
-    let header = format!("spinvalence hub mesh of {}, mm, Z up", cfg.target);
+    let [mesh_obj, frame_obj, frame_json] = frame_texts(&cfg.target, mesh, frame);
     let written = files.commit(&[
-        &sv_io::write_quad_obj(mesh, &header),
-        &sv_io::frame_to_obj(frame),
+        &mesh_obj,
+        &frame_obj,
         &html,
         &serde_json::to_string_pretty(timings)?,
         &serde_json::to_string_pretty(report)?,
-        &sv_io::frame_to_json(frame),
+        &frame_json,
     ])?;
     for dir in dirs {
         dir.commit()?;
@@ -791,6 +775,21 @@ fn write_without_strips(
         }
     }
     Ok(written)
+}
+
+/// The texts of mesh.obj, frame.obj and frame.json: the hub mesh of `target` and the frame
+/// on it.
+fn frame_texts(
+    target: &str,
+    mesh: &sv_frame::QuadMesh,
+    frame: &sv_frame::FrameFile,
+) -> [String; 3] {
+    let header = format!("spinvalence hub mesh of {target}, mm, Z up");
+    [
+        sv_io::write_quad_obj(mesh, &header),
+        sv_io::frame_to_obj(frame),
+        sv_io::frame_to_json(frame),
+    ]
 }
 
 /// What closing the joints gives: the moved hub mesh, the frame on it, and the report.
@@ -891,8 +890,7 @@ fn close_the_joints(
     cfg.strips.direction = direction;
     // the hub mesh moved: its goals are measured again (conicality, the paper's stand-in
     // for tiles that can meet, is not held where the joints themselves are closed)
-    let index = sv_surface::TargetIndex::new(target).map_err(|e| anyhow!("{e}"))?;
-    let mut again = sv_surface::measure_hub_mesh(&index, &mesh, cfg.secondary.unit_size)
+    let mut again = sv_surface::measure_hub_mesh(surface.index(), &mesh, cfg.secondary.unit_size)
         .map_err(|e| anyhow!("{}: {e}", cfg.target))?;
     again.unmet.retain(|u| !u.starts_with("conical"));
     again.iterations = report.iterations;

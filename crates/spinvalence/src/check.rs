@@ -50,19 +50,32 @@ pub fn run(args: &CheckArgs) -> Result<bool> {
     if report.ok() {
         return Ok(true);
     }
-    let failed: Vec<String> = report
-        .rows
-        .iter()
-        .filter(|r| !r.ok)
-        .map(|r| format!("{} (at {})", r.name, r.at))
-        .collect();
+    let failed = failures(&report);
     eprintln!(
         "error: {name}: {} of {} checks failed: {}",
         failed.len(),
         report.rows.len(),
-        failed.join(", ")
+        failed.join("; ")
     );
     Ok(false)
+}
+
+/// Every failing row, one phrase each: its name, worst, limit and place.
+pub fn failures(report: &CheckReport) -> Vec<String> {
+    report
+        .rows
+        .iter()
+        .filter(|r| !r.ok)
+        .map(|r| {
+            format!(
+                "{} {} (limit {}) at {}",
+                r.name,
+                number(r.worst),
+                number(r.limit),
+                r.at
+            )
+        })
+        .collect()
 }
 
 /// The frame's rows, then the fold check of its strips.

@@ -38,6 +38,11 @@ impl<'a> TargetSurface<'a> {
             boundary,
         })
     }
+
+    /// The target's index (closest points), to measure a hub mesh on it.
+    pub fn index(&self) -> &TargetIndex<'a> {
+        &self.index
+    }
 }
 
 impl sv_frame::Surface for TargetSurface<'_> {
