@@ -30,8 +30,8 @@ const STOP_CLOSENESS: Real = 0.6;
 const EDGE_MIN: Real = 0.5;
 /// Sine of the corner angle below which the corner barrier acts (about 20 and 160 deg).
 const SINE_MIN: Real = 0.34;
-/// Iterations over which the best iterate's distance from the goals must fall while the
-/// hard goals are unmet, else the run stops (on that iterate).
+/// Iterations over which the best iterate's distance from the goals must fall while some
+/// goal is unmet, else the run stops (on that iterate).
 const STALL_WINDOW: usize = 20;
 /// Relative fall of that distance that counts.
 const STALL_GAIN: Real = 0.02;
@@ -564,11 +564,10 @@ pub(crate) fn optimise_indexed(
             && max_move <= opts.max_step
             && (hard_met || hard >= HARD_GAIN_MAX || hard <= HARD_GAIN_MIN);
         // no longer falling: the best iterate's distance from the goals has not fallen
-        // by STALL_GAIN for STALL_WINDOW iterations (the goals conflict)
-        let flat = !hard_met
-            && best.as_ref().is_some_and(|b| b.0 > 0.0)
-            && it >= improved_at + STALL_WINDOW;
-        if it >= 5 && ((hard_met && soft_met) || stalled || (!hard_met && flat)) {
+        // by STALL_GAIN for STALL_WINDOW iterations (the goals conflict; also where the
+        // hard goals hold and the iterates cycle short of the others)
+        let flat = best.as_ref().is_some_and(|b| b.0 > 0.0) && it >= improved_at + STALL_WINDOW;
+        if it >= 5 && ((hard_met && soft_met) || stalled || flat) {
             break;
         }
     }
