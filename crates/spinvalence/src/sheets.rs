@@ -22,19 +22,22 @@ pub struct NestStage {
     pub sheet_files: Vec<String>,
 }
 
-/// Wall seconds to draw a part on its sheet (DXF with pierce points, SVG) on the reference
-/// machine, both cores: per part and per vertex of its contours and etching, fitted to the
-/// 664 strips of the 20 x 12 m dome and the 2,000 small plates of `many_parts.dxf`
-/// (docs/nesting.md).
-const DRAW_SECONDS_PER_PART: f64 = 50e-6;
+/// Wall seconds to draw a part on its sheet (DXF with pierce points, SVG) on a quiet 2-core
+/// machine, per part and per vertex of its contours and etching, measured on the 673 strips
+/// of the 20 x 12 m dome at 150 mm (1.5 M vertices, 0.78 s) and the 2,000 small plates of
+/// `many_parts.dxf` (0.059 s) (docs/nesting.md).
+const DRAW_SECONDS_PER_PART: f64 = 30e-6;
 /// See [`DRAW_SECONDS_PER_PART`].
-const DRAW_SECONDS_PER_VERTEX: f64 = 2.5e-6;
+const DRAW_SECONDS_PER_VERTEX: f64 = 0.5e-6;
+/// Margin on that rate, for a machine a little slower than the one it was measured on.
+const DRAW_MARGIN: f64 = 1.5;
 
 /// Share of the time box the nesting keeps whatever the drawing is expected to take.
 const NEST_SHARE_MIN: f64 = 0.5;
 
-/// Expected wall seconds to draw `parts` on their sheets.
-fn drawing_seconds(parts: &[SheetPart]) -> f64 {
+/// Expected wall seconds to draw `parts` on their sheets on a machine `slowdown` times
+/// slower than a quiet one.
+fn drawing_seconds(parts: &[SheetPart], slowdown: f64) -> f64 {
     let vertices: usize = parts
         .iter()
         .map(|p| {
@@ -43,7 +46,26 @@ fn drawing_seconds(parts: &[SheetPart]) -> f64 {
                 + p.etch.iter().map(Vec::len).sum::<usize>()
         })
         .sum();
-    DRAW_SECONDS_PER_PART * parts.len() as f64 + DRAW_SECONDS_PER_VERTEX * vertices as f64
+    let quiet =
+        DRAW_SECONDS_PER_PART * parts.len() as f64 + DRAW_SECONDS_PER_VERTEX * vertices as f64;
+    quiet * DRAW_MARGIN * slowdown
+}
+
+/// How much slower than when quiet this machine runs now: the runnable processes of the
+/// last minute per core (`/proc/loadavg`), at least 1; 1 where that cannot be read. The
+/// drawing is not capped by the clock, so the nesting leaves it room in proportion.
+fn machine_slowdown() -> f64 {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|text| slowdown_from_loadavg(&text, cores))
+        .unwrap_or(1.0)
+}
+
+/// The slowdown a `/proc/loadavg` text gives on `cores` cores (see [`machine_slowdown`]).
+fn slowdown_from_loadavg(text: &str, cores: f64) -> Option<f64> {
+    let load: f64 = text.split_whitespace().next()?.parse().ok()?;
+    (load.is_finite() && load >= 0.0).then(|| (load / cores.max(1.0)).max(1.0))
 }
 
 /// Nest `parts` with `options` and draw the sheets in `convention`; `thickness` (mm) goes
@@ -57,14 +79,18 @@ pub fn run(
     quiet: bool,
 ) -> Result<NestStage> {
     let plain: Vec<Part> = parts.iter().map(|p| p.part.clone()).collect();
-    // the time box holds the drawing too: the nesting gets what drawing these parts leaves
-    // (at least half of it)
-    let drawing = Duration::from_secs_f64(drawing_seconds(parts));
-    let nesting = NestOptions {
-        time_limit: options
+    // the time box holds the drawing too: the nesting's clock gets what drawing these
+    // parts leaves on this machine as loaded now (at least half of it); its work budget,
+    // which decides the sheets, what drawing leaves on a quiet one
+    let leave = |drawing: f64| {
+        options
             .time_limit
-            .saturating_sub(drawing)
-            .max(options.time_limit.mul_f64(NEST_SHARE_MIN)),
+            .saturating_sub(Duration::from_secs_f64(drawing))
+            .max(options.time_limit.mul_f64(NEST_SHARE_MIN))
+    };
+    let nesting = NestOptions {
+        time_limit: leave(drawing_seconds(parts, machine_slowdown())),
+        budget_time: Some(leave(drawing_seconds(parts, 1.0))),
         ..options.clone()
     };
     let bar = progress_bar(quiet, 1000, "nesting");
@@ -213,4 +239,21 @@ pub fn summary_rows(report: &NestReport, seconds: f64) -> Vec<Vec<String>> {
         rows.push(vec!["left out".into(), format!("{}: {}", l.part, l.reason)]);
     }
     rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::slowdown_from_loadavg;
+
+    #[test]
+    fn the_load_per_core_slows_the_machine_and_a_quiet_one_is_not_faster() {
+        let quiet = "0.52 0.60 0.70 1/234 5678\n";
+        assert_eq!(slowdown_from_loadavg(quiet, 2.0), Some(1.0));
+        let busy = "5.00 3.10 2.00 6/300 9999\n";
+        assert_eq!(slowdown_from_loadavg(busy, 2.0), Some(2.5));
+        assert_eq!(slowdown_from_loadavg(busy, 8.0), Some(1.0));
+        for bad in ["", "load", "NaN 1 1", "-1 0 0", "inf 0 0"] {
+            assert_eq!(slowdown_from_loadavg(bad, 2.0), None, "{bad:?}");
+        }
+    }
 }

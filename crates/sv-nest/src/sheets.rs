@@ -122,6 +122,11 @@ pub struct NestOptions {
     /// search first (then [`SearchReport::cut_by_time`] says so); `None`: derived from
     /// `time_limit` and the parts ([`sheet_work_budget`])
     pub max_evaluations: Option<u64>,
+    /// the time the work budget is derived from when `max_evaluations` is `None`; `None`:
+    /// `time_limit`. A caller that keeps part of its time box for work whose length follows
+    /// the machine's load (drawing the sheets) shortens `time_limit` on a busy machine and
+    /// keeps this, so that the budget, and with it the sheets, stays the same
+    pub budget_time: Option<Duration>,
     /// samples per part in the constructive phase
     pub construct_samples: usize,
 }
@@ -140,6 +145,7 @@ impl Default for NestOptions {
             seed: 0,
             time_limit: Duration::from_secs(10),
             max_evaluations: None,
+            budget_time: None,
             construct_samples: 300,
         }
     }
@@ -435,9 +441,10 @@ pub fn nest_sheets(
         .map(|k| k.item.shape_cd().vertices().len())
         .sum();
     let fixed = fixed_seconds(shape_vertices, construction_evaluations);
-    let work = opts
-        .max_evaluations
-        .unwrap_or_else(|| sheet_work_budget(mean_vertices, opts.time_limit, fixed));
+    let work = opts.max_evaluations.unwrap_or_else(|| {
+        let time = opts.budget_time.unwrap_or(opts.time_limit);
+        sheet_work_budget(mean_vertices, time, fixed)
+    });
     let area_of = |inst: usize| prepared.parts[inst].area;
     let sheet_area = |st: usize| opts.sheets[st].width * opts.sheets[st].height;
     // the search works on the emptiest sheets (the cost of a search does not grow with
