@@ -550,3 +550,36 @@ fn a_part_as_long_as_the_margins_allow_is_nested() {
         .reason
         .contains("larger than every sheet"));
 }
+
+#[test]
+fn the_budget_time_not_the_clock_decides_the_work() {
+    // a caller that keeps more of its box for drawing on a busy machine shortens the clock
+    // (`time_limit`) and keeps `budget_time`: the same work, so the same sheets
+    let parts = test_parts();
+    let run = |clock: u64, budget: f64| {
+        let opts = NestOptions {
+            time_limit: Duration::from_secs(clock),
+            max_evaluations: None,
+            budget_time: Some(Duration::from_secs_f64(budget)),
+            ..small_opts()
+        };
+        let report = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+        assert!(!report.search.cut_by_time, "{:?}", report.search);
+        report
+    };
+    let (long, short) = (run(600, 0.2), run(300, 0.2));
+    assert_eq!(long.search.work_budget, short.search.work_budget);
+    assert!(long.search.work_budget > 0, "{:?}", long.search);
+    assert_eq!(
+        serde_json::to_string(&long.sheets).unwrap(),
+        serde_json::to_string(&short.sheets).unwrap()
+    );
+    // and the budget follows it
+    let more = run(600, 0.4);
+    assert!(
+        more.search.work_budget > long.search.work_budget,
+        "{} against {}",
+        more.search.work_budget,
+        long.search.work_budget
+    );
+}
