@@ -35,9 +35,9 @@ const DRAW_MARGIN: f64 = 1.5;
 /// Share of the time box the nesting keeps whatever the drawing is expected to take.
 const NEST_SHARE_MIN: f64 = 0.5;
 
-/// Expected wall seconds to draw `parts` on their sheets on a machine `slowdown` times
-/// slower than a quiet one.
-fn drawing_seconds(parts: &[SheetPart], slowdown: f64) -> f64 {
+/// Expected wall seconds to draw `parts` on their sheets on a quiet machine, with
+/// [`DRAW_MARGIN`].
+fn drawing_seconds(parts: &[SheetPart]) -> f64 {
     let vertices: usize = parts
         .iter()
         .map(|p| {
@@ -48,7 +48,7 @@ fn drawing_seconds(parts: &[SheetPart], slowdown: f64) -> f64 {
         .sum();
     let quiet =
         DRAW_SECONDS_PER_PART * parts.len() as f64 + DRAW_SECONDS_PER_VERTEX * vertices as f64;
-    quiet * DRAW_MARGIN * slowdown
+    quiet * DRAW_MARGIN
 }
 
 /// How much slower than when quiet this machine runs now: the runnable processes of the
@@ -82,15 +82,16 @@ pub fn run(
     // the time box holds the drawing too: the nesting's clock gets what drawing these
     // parts leaves on this machine as loaded now (at least half of it); its work budget,
     // which decides the sheets, what drawing leaves on a quiet one
-    let leave = |drawing: f64| {
+    let leave = |seconds: f64| {
         options
             .time_limit
-            .saturating_sub(Duration::from_secs_f64(drawing))
+            .saturating_sub(Duration::from_secs_f64(seconds))
             .max(options.time_limit.mul_f64(NEST_SHARE_MIN))
     };
+    let drawing = drawing_seconds(parts);
     let nesting = NestOptions {
-        time_limit: leave(drawing_seconds(parts, machine_slowdown())),
-        budget_time: Some(leave(drawing_seconds(parts, 1.0))),
+        time_limit: leave(drawing * machine_slowdown()),
+        budget_time: Some(leave(drawing)),
         ..options.clone()
     };
     let bar = progress_bar(quiet, 1000, "nesting");
