@@ -543,15 +543,21 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
     // lap (sqrt 2 - 1) L - 2 sqrt 2 inset reaches 25 mm from this unit size on. The build
     // cuts that sheet, leaves the joints open (no solve lifts a lap that far) and says why
     // among the unmet goals; with --strict that is an error.
+    // (the nesting's fixed work: on a busy machine the time cap would cut the search and
+    // say so on stderr, which the --strict run below must not have)
     let small_args = [
-        "build",
-        "--target",
-        "builtin:flat",
-        "--unit-size",
-        "150",
-        "--out",
-        "small",
-    ];
+        &[
+            "build",
+            "--target",
+            "builtin:flat",
+            "--unit-size",
+            "150",
+            "--out",
+            "small",
+        ][..],
+        &crate::build::NEST_WORK,
+    ]
+    .concat();
     let small = dir.run(&small_args);
     small.expect_code(3);
     let root2 = 2f64.sqrt();
