@@ -192,3 +192,30 @@ fn the_join_tolerance_is_settable_and_open_contours_say_how_far_apart() {
         read.notes
     );
 }
+
+/// The DXF parser's messages quote the file, line breaks and all, and it panics on a header
+/// date it cannot hold: both are one-line errors.
+#[test]
+fn parser_failures_are_one_line_errors() {
+    let date = "0\nSECTION\n2\nHEADER\n9\n$TDCREATE\n40\n1e300\n0\nENDSEC\n0\nEOF\n";
+    let err = read_dxf(date.as_bytes(), "d.dxf", &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        err,
+        "d.dxf: not a readable DXF file: the parser failed on a value it cannot hold, such as a date out of range (TimeDelta::seconds out of bounds)"
+    );
+    // binary DXF, a line break inside the first section's name
+    let broken = b"AutoCAD Binary DXF\r\n\x1a\x00\x00SEC\nTION\x00\x00EOF\x00";
+    let err = read_dxf(broken, "b.dxf", &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(!err.contains(['\n', '\r']), "{err:?}");
+    assert!(err.starts_with("b.dxf: not a readable DXF file: "), "{err}");
+    let long = format!("0\n{}\n0\nEOF\n", "x".repeat(5000));
+    let err = read_dxf(long.as_bytes(), "l.dxf", &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.len() < 300 && err.contains("xxx...xxx"), "{err}");
+    assert!(err.ends_with("at line/offset 1"), "{err}");
+}

@@ -216,6 +216,55 @@ fn only_layer_tables(bytes: &[u8]) -> Option<String> {
     dropped.then_some(out)
 }
 
+/// Longest parser message quoted in an error (characters, before escaping).
+const PARSER_MESSAGE_CHARS: usize = 200;
+
+/// The `dxf` crate's drawing of `bytes`, or why not in one line: its messages quote the
+/// file (line breaks, binary bytes, a line of any length), so control characters are
+/// escaped and the middle of a long message is cut out; and it panics on some values it cannot hold (a
+/// header date such as `$TDCREATE` past the year 262143), which is an error like any other.
+fn load(bytes: &[u8]) -> Result<dxf::Drawing, String> {
+    let message =
+        match std::panic::catch_unwind(|| dxf::Drawing::load(&mut std::io::Cursor::new(bytes))) {
+            Ok(Ok(drawing)) => return Ok(drawing),
+            Ok(Err(e)) => e.to_string(),
+            Err(panic) => {
+                let what = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                format!(
+                "the parser failed on a value it cannot hold, such as a date out of range ({what})"
+            )
+            }
+        };
+    let chars: Vec<char> = message.chars().collect();
+    // the start and the end (where the place is), the quoted middle cut out
+    let (head, tail) = if chars.len() > PARSER_MESSAGE_CHARS {
+        (
+            &chars[..PARSER_MESSAGE_CHARS / 2],
+            &chars[chars.len() - PARSER_MESSAGE_CHARS / 2..],
+        )
+    } else {
+        (&chars[..], &chars[..0])
+    };
+    let mut out = String::new();
+    for (k, part) in [head, tail].into_iter().enumerate() {
+        if k == 1 && !part.is_empty() {
+            out.push_str("...");
+        }
+        for &c in part {
+            if c.is_control() {
+                out.extend(c.escape_debug());
+            } else {
+                out.push(c);
+            }
+        }
+    }
+    Err(out)
+}
+
 /// Reads a DXF file's bytes (ASCII or binary); `name` names the file in messages and
 /// part ids. A file that cannot be parsed, or whose units are unknown, is an error; a
 /// file that parses gives its parts, with what it could not use in `rejected` and
@@ -235,7 +284,7 @@ pub fn read_dxf(bytes: &[u8], name: &str, options: &ReadOptions) -> Result<DxfPa
     }
     let (code, handles) = prescan(bytes);
     let mut notes: Vec<Note> = Vec::new();
-    let drawing = match dxf::Drawing::load(&mut std::io::Cursor::new(bytes)) {
+    let drawing = match load(bytes) {
         Ok(d) => d,
         // the dxf crate fails on some tables the reader does not need (an R12 DIMSTYLE
         // naming its arrow blocks under group code 5, as ezdxf writes it): read the file
@@ -243,8 +292,7 @@ pub fn read_dxf(bytes: &[u8], name: &str, options: &ReadOptions) -> Result<DxfPa
         Err(e) => {
             let why = format!("not a readable DXF file: {e}");
             let trimmed = only_layer_tables(bytes).ok_or_else(|| fail(why.clone()))?;
-            let d = dxf::Drawing::load(&mut std::io::Cursor::new(trimmed.as_bytes()))
-                .map_err(|_| fail(why))?;
+            let d = load(trimmed.as_bytes()).map_err(|_| fail(why))?;
             notes.push(Note {
                 file: name.to_string(),
                 what: format!("the DXF parser failed on a table ({e}): read with the LAYER and LTYPE tables only"),
