@@ -193,6 +193,125 @@ fn the_join_tolerance_is_settable_and_open_contours_say_how_far_apart() {
     );
 }
 
+/// The notes of reading `entities` (mm) with `options`, one string each.
+fn notes_of(entities: &str, options: &ReadOptions) -> Vec<String> {
+    let text = with_units(4, entities);
+    let read = read_dxf(text.as_bytes(), "f.dxf", options).unwrap();
+    read.notes.iter().map(|n| n.to_string()).collect()
+}
+
+/// An ARC or ELLIPSE whose start is 1e20 degrees was read by adding a turn at a time until
+/// the end passed the start, which at 1e20 never happens: a hang. A NaN angle gave a part
+/// with NaN corners.
+#[test]
+fn arcs_with_huge_or_non_finite_angles_are_skipped_not_a_hang() {
+    let arc =
+        |a0: &str, a1: &str| format!("0\nARC\n8\n0\n10\n0\n20\n0\n40\n10\n50\n{a0}\n51\n{a1}\n");
+    let notes = notes_of(&arc("1e20", "0"), &ReadOptions::default());
+    assert!(
+        notes.contains(&"f.dxf: skipped: start and end angle 1e20, 0.0: not finite, or beyond a million turns: layer 0: ARC #1".to_string()),
+        "{notes:?}"
+    );
+    let notes = notes_of(&arc("nan", "90"), &ReadOptions::default());
+    assert!(
+        notes.contains(&"f.dxf: skipped: start and end angle NaN, 90.0: not finite, or beyond a million turns: layer 0: ARC #1".to_string()),
+        "{notes:?}"
+    );
+    // ordinary angles as before: 270 to 90 is the half on the right, 720 turns ahead are
+    // the same angle
+    let text = with_units(4, &format!("{}{}", arc("270", "90"), arc("90", "-360")));
+    let read = read_dxf(text.as_bytes(), "f.dxf", &ReadOptions::default()).unwrap();
+    assert_eq!(read.parts.len(), 1, "{:?}", read.rejected);
+    let area = std::f64::consts::PI * 100.0;
+    assert!((read.parts[0].outer.area() - area).abs() < 1e-6);
+    let ellipse =
+        "0\nELLIPSE\n8\n0\n10\n0\n20\n0\n30\n0\n11\n40\n21\n0\n31\n0\n40\n0.5\n41\n-1e300\n42\n1\n";
+    let notes = notes_of(ellipse, &ReadOptions::default());
+    assert!(
+        notes.iter().any(|n| n.starts_with("f.dxf: skipped: start and end parameter -1e300, 1.0: not finite, or beyond a million turns: layer 0: ELLIPSE")),
+        "{notes:?}"
+    );
+}
+
+/// A coordinate of 1e300 overflowed the chaining grid (a panic in a debug build, lines
+/// left unchained in a release build) or gave a part of infinite area; a NaN on the ETCH
+/// layer was etched.
+#[test]
+fn coordinates_not_finite_or_far_out_are_skipped_with_a_note() {
+    let far = lw(
+        "0",
+        &[[0.0, 0.0], [100.0, 0.0], [100.0, 1e300], [0.0, 100.0]],
+    );
+    let notes = notes_of(&far, &ReadOptions::default());
+    assert!(
+        notes.contains(&"f.dxf: skipped: farther than 1e9 mm from the origin (drawn in the wrong units, or a corrupt number?): layer 0: LWPOLYLINE #1".to_string()),
+        "{notes:?}"
+    );
+    let line = "0\nLINE\n8\n0\n10\n0\n20\n0\n11\n1e300\n21\n0\n";
+    let notes = notes_of(line, &ReadOptions::default());
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("farther than 1e9 mm") && n.ends_with("LINE #1")),
+        "{notes:?}"
+    );
+    let etch = format!(
+        "{}0\nLWPOLYLINE\n8\nETCH\n90\n2\n70\n0\n10\n10\n20\n10\n10\nnan\n20\n20\n",
+        lw("OUTSIDE", &square(0.0, 0.0, 100.0))
+    );
+    let text = with_units(4, &etch);
+    let read = read_dxf(text.as_bytes(), "f.dxf", &ReadOptions::default()).unwrap();
+    assert!(read.parts[0].etch.is_empty(), "{:?}", read.parts[0].etch);
+    let notes: Vec<String> = read.notes.iter().map(|n| n.to_string()).collect();
+    assert!(
+        notes.contains(
+            &"f.dxf: skipped: a coordinate that is not a finite number: layer ETCH: LWPOLYLINE #2"
+                .to_string()
+        ),
+        "{notes:?}"
+    );
+}
+
+/// A 30000 x 30000 INSERT array is 900 million copies: the reader looped over them (and
+/// overflowed `rows * cols` in a debug build); nested arrays multiply the same way.
+#[test]
+fn an_insert_array_past_the_entity_limit_is_skipped_with_a_note() {
+    let blocks = "0\nSECTION\n2\nBLOCKS\n0\nBLOCK\n8\n0\n2\nC\n70\n0\n10\n0\n20\n0\n30\n0\n\
+0\nCIRCLE\n8\n0\n10\n0\n20\n0\n40\n3\n0\nENDBLK\n0\nENDSEC\n";
+    let text = format!(
+        "{blocks}0\nSECTION\n2\nENTITIES\n0\nINSERT\n8\n0\n2\nC\n10\n0\n20\n0\n70\n30000\n71\n30000\n44\n10\n45\n10\n\
+0\nINSERT\n8\n0\n2\nC\n10\n0\n20\n0\n70\n3\n71\n2\n44\n10\n45\n10\n0\nENDSEC\n0\nEOF\n"
+    );
+    let read = read_dxf(text.as_bytes(), "f.dxf", &ReadOptions::default()).unwrap();
+    let notes: Vec<String> = read.notes.iter().map(|n| n.to_string()).collect();
+    assert!(
+        notes.contains(&"f.dxf: skipped: 30000 x 30000 copies of block \"C\" (1 entities) take the file past 50000 entities: layer 0: INSERT #1".to_string()),
+        "{notes:?}"
+    );
+    // the small array is read
+    assert_eq!(read.parts.len(), 6);
+}
+
+/// A curve that needs more samples than the reader takes (a nanometre arc tolerance, a
+/// 100 km ellipse) was sampled for minutes into gigabytes.
+#[test]
+fn a_curve_too_large_for_the_arc_tolerance_is_skipped_with_a_note() {
+    let ellipse = "0\nELLIPSE\n8\n0\n10\n0\n20\n0\n30\n0\n11\n40\n21\n0\n31\n0\n40\n0.5\n41\n0\n42\n6.283185307179586\n";
+    let options = ReadOptions {
+        arc_tolerance: 1e-9,
+        ..ReadOptions::default()
+    };
+    let notes = notes_of(ellipse, &options);
+    assert!(
+        notes.contains(&"f.dxf: skipped: too large for the arc tolerance 0.000000001 mm (over 1048576 samples): drawn in the wrong units, or a corrupt number?: layer 0: ELLIPSE #1".to_string()),
+        "{notes:?}"
+    );
+    // at the default tolerance it is a part
+    let text = with_units(4, ellipse);
+    let read = read_dxf(text.as_bytes(), "f.dxf", &ReadOptions::default()).unwrap();
+    assert_eq!(read.parts.len(), 1);
+}
+
 /// The DXF parser's messages quote the file, line breaks and all, and it panics on a header
 /// date it cannot hold: both are one-line errors.
 #[test]

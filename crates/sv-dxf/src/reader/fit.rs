@@ -14,9 +14,14 @@ pub(crate) struct Curve<'a> {
     pub(crate) breaks: Vec<f64>,
 }
 
+/// Most samples of one curve: a circle of 30 km radius at the default arc tolerance. A
+/// curve that needs more is huge for its tolerance (wrong units, a corrupt number, a
+/// tolerance of nanometres), and sampling it would take minutes and gigabytes.
+pub(crate) const MAX_SAMPLES: usize = 1 << 20;
+
 /// Samples of `curve` so dense that between two of them the curve stays within
-/// `tolerance / 8` of their chord.
-fn samples(curve: &Curve<'_>, tolerance: f64) -> Vec<[f64; 2]> {
+/// `tolerance / 8` of their chord; `None` beyond [`MAX_SAMPLES`].
+fn samples(curve: &Curve<'_>, tolerance: f64) -> Option<Vec<[f64; 2]>> {
     let mut ts = vec![curve.t0];
     ts.extend(
         curve
@@ -33,13 +38,23 @@ fn samples(curve: &Curve<'_>, tolerance: f64) -> Vec<[f64; 2]> {
         for k in 0..n {
             let a = w[0] + (w[1] - w[0]) * k as f64 / n as f64;
             let b = w[0] + (w[1] - w[0]) * (k + 1) as f64 / n as f64;
-            refine(curve, a, b, tolerance / 8.0, 0, &mut out);
+            refine(curve, a, b, tolerance / 8.0, 0, &mut out)?;
         }
     }
-    out
+    Some(out)
 }
 
-fn refine(curve: &Curve<'_>, a: f64, b: f64, tol: f64, depth: u32, out: &mut Vec<[f64; 2]>) {
+fn refine(
+    curve: &Curve<'_>,
+    a: f64,
+    b: f64,
+    tol: f64,
+    depth: u32,
+    out: &mut Vec<[f64; 2]>,
+) -> Option<()> {
+    if out.len() > MAX_SAMPLES {
+        return None;
+    }
     let (pa, pb) = (*out.last().unwrap_or(&(curve.at)(a)), (curve.at)(b));
     let m = 0.5 * (a + b);
     let pm = (curve.at)(m);
@@ -51,11 +66,12 @@ fn refine(curve: &Curve<'_>, a: f64, b: f64, tol: f64, depth: u32, out: &mut Vec
         .map(|&p| sv_geom::planar::point_segment_distance(p, pa, pb))
         .fold(0.0, f64::max);
     if depth < 24 && off > tol {
-        refine(curve, a, m, tol, depth + 1, out);
-        refine(curve, m, b, tol, depth + 1, out);
+        refine(curve, a, m, tol, depth + 1, out)?;
+        refine(curve, m, b, tol, depth + 1, out)?;
     } else {
         out.push(pb);
     }
+    Some(())
 }
 
 /// The circle through three points: centre and radius; `None` when they are collinear.
@@ -125,9 +141,14 @@ fn fit(p: &[[f64; 2]], i: usize, j: usize, tol: f64) -> Option<Segment> {
     })
 }
 
-/// Arcs and lines within `tolerance` (mm) of `curve`, from its start to its end.
-pub(crate) fn fit_arcs(curve: &Curve<'_>, tolerance: f64) -> Vec<Segment> {
-    let p = samples(curve, tolerance);
+/// Arcs and lines within `tolerance` (mm) of `curve`, from its start to its end; an
+/// error naming the size when the curve needs more than [`MAX_SAMPLES`] samples.
+pub(crate) fn fit_arcs(curve: &Curve<'_>, tolerance: f64) -> Result<Vec<Segment>, String> {
+    let p = samples(curve, tolerance).ok_or_else(|| {
+        format!(
+            "too large for the arc tolerance {tolerance} mm (over {MAX_SAMPLES} samples): drawn in the wrong units, or a corrupt number?"
+        )
+    })?;
     let tol = tolerance / 2.0;
     let n = p.len() - 1;
     let mut out = Vec::new();
@@ -154,7 +175,7 @@ pub(crate) fn fit_arcs(curve: &Curve<'_>, tolerance: f64) -> Vec<Segment> {
         }
         i = lo;
     }
-    out
+    Ok(out)
 }
 
 /// A NURBS curve: degree, knots, control points and weights (empty: all 1).
@@ -404,7 +425,7 @@ mod tests {
             t1: std::f64::consts::TAU,
             breaks: vec![],
         };
-        let segs = fit_arcs(&curve, 0.01);
+        let segs = fit_arcs(&curve, 0.01).unwrap();
         assert!(
             segs.len() < 60 && segs.iter().all(|s| s.bulge != 0.0),
             "{}",
@@ -452,6 +473,7 @@ mod tests {
                 },
                 0.01,
             )
+            .unwrap()
         };
         let segs = fit(&n);
         assert_eq!(segs.len(), 1);

@@ -96,6 +96,15 @@ struct Ctx {
 
 const MAX_DEPTH: usize = 32;
 
+/// Most entities read, block copies counted: an INSERT whose array or nesting would go past
+/// it is skipped (a 30000 x 30000 array is a billion copies, not a part drawing; a part
+/// drawing has hundreds, a full sheet thousands).
+const MAX_ENTITIES: usize = 50_000;
+
+/// Farthest a drawn point may be from the origin (mm), 1000 km: beyond it a drawing is in
+/// the wrong units or holds a corrupt number, and areas and the chaining grid overflow.
+const MAX_COORDINATE: f64 = 1e9;
+
 fn kind(e: &EntityType) -> &'static str {
     match e {
         EntityType::Line(_) => "LINE",
@@ -418,6 +427,20 @@ impl<'a> Walk<'a> {
             .then(&Affine::scale(ins.x_scale_factor, ins.y_scale_factor))
             .then(&Affine::translation(-base[0], -base[1]));
         let (cols, rows) = (ins.column_count.max(1), ins.row_count.max(1));
+        let cells = usize::from(cols.unsigned_abs()) * usize::from(rows.unsigned_abs());
+        if cells.saturating_mul(block.entities.len()) > MAX_ENTITIES.saturating_sub(self.count) {
+            self.skip(
+                layer,
+                "INSERT",
+                &format!(
+                    "{rows} x {cols} copies of block {:?} ({} entities) take the file past {MAX_ENTITIES} entities",
+                    ins.name,
+                    block.entities.len()
+                ),
+                handle,
+            );
+            return;
+        }
         let line_type = match e.common.line_type_name.to_uppercase().as_str() {
             "" | "BYLAYER" => self.layer_line_types.get(&layer.to_uppercase()).cloned(),
             "BYBLOCK" => ctx.line_type.clone(),
@@ -432,7 +455,7 @@ impl<'a> Walk<'a> {
                     f64::from(r) * ins.row_spacing,
                 ]);
                 let place = Affine::translation(p[0] + off[0], p[1] + off[1]);
-                let cell = if cols * rows > 1 {
+                let cell = if cells > 1 {
                     format!("{handle}[{r},{c}]>")
                 } else {
                     format!("{handle}>")
@@ -452,9 +475,33 @@ impl<'a> Walk<'a> {
         }
     }
 
-    /// The entity as segments in world mm, whether it is closed, and what was converted.
+    /// The entity as segments in world mm, whether it is closed, and what was converted;
+    /// refused where a coordinate is not finite or farther than [`MAX_COORDINATE`] from the
+    /// origin.
     #[allow(clippy::type_complexity)]
     fn curve(&self, e: &Entity, ctx: &Ctx) -> Result<(Vec<Segment>, bool, Option<String>), String> {
+        let (segs, closed, note) = self.drawn(e, ctx)?;
+        for s in &segs {
+            let ends = || s.start.iter().chain(&s.end);
+            if !(ends().all(|v| v.is_finite()) && s.bulge.is_finite()) {
+                return Err("a coordinate that is not a finite number".into());
+            }
+            let far = ends().fold(0.0, |m: f64, v| m.max(v.abs()));
+            let reach = s
+                .arc()
+                .map_or(far, |(r, c)| far.max(c[0].abs().max(c[1].abs()) + r));
+            if reach.is_nan() || reach > MAX_COORDINATE {
+                return Err(format!(
+                    "farther than {MAX_COORDINATE:e} mm from the origin (drawn in the wrong units, or a corrupt number?)"
+                ));
+            }
+        }
+        Ok((segs, closed, note))
+    }
+
+    /// [`Walk::curve`] before its coordinates are checked.
+    #[allow(clippy::type_complexity)]
+    fn drawn(&self, e: &Entity, ctx: &Ctx) -> Result<(Vec<Segment>, bool, Option<String>), String> {
         let tilted = || "not in the XY plane (tilted extrusion direction)".to_string();
         let tol = self.arc_tolerance;
         match &e.specific {
@@ -467,18 +514,20 @@ impl<'a> Walk<'a> {
             }
             EntityType::Arc(a) => {
                 let xf = ctx.xf.then(&ocs(xyz(&a.normal)).ok_or_else(tilted)?);
-                let (a0, mut a1) = (a.start_angle, a.end_angle);
-                while a1 <= a0 {
-                    a1 += 360.0;
-                }
-                Ok(arc(
+                let (a0, a1) = (a.start_angle, a.end_angle);
+                let a1 = turn_past(a0, a1, 360.0).ok_or_else(|| {
+                    format!(
+                        "start and end angle {a0:?}, {a1:?}: not finite, or beyond a million turns"
+                    )
+                })?;
+                arc(
                     &xf,
                     xy(&a.center),
                     a.radius,
                     a0.to_radians(),
                     a1.to_radians(),
                     tol,
-                ))
+                )
             }
             EntityType::Circle(c) => {
                 let xf = ctx.xf.then(&ocs(xyz(&c.normal)).ok_or_else(tilted)?);
@@ -486,7 +535,7 @@ impl<'a> Walk<'a> {
                     return Ok((Vec::new(), true, None));
                 }
                 let (mut segs, _, note) =
-                    arc(&xf, xy(&c.center), c.radius, 0.0, std::f64::consts::PI, tol);
+                    arc(&xf, xy(&c.center), c.radius, 0.0, std::f64::consts::PI, tol)?;
                 let (more, _, _) = arc(
                     &xf,
                     xy(&c.center),
@@ -494,7 +543,7 @@ impl<'a> Walk<'a> {
                     std::f64::consts::PI,
                     std::f64::consts::TAU,
                     tol,
-                );
+                )?;
                 segs.extend(more);
                 Ok((segs, true, note))
             }
@@ -504,7 +553,7 @@ impl<'a> Walk<'a> {
                     .then(&ocs(xyz(&p.extrusion_direction)).ok_or_else(tilted)?);
                 let v: Vec<([f64; 2], f64)> =
                     p.vertices.iter().map(|v| ([v.x, v.y], v.bulge)).collect();
-                Ok(polyline(&xf, &v, p.is_closed(), tol))
+                polyline(&xf, &v, p.is_closed(), tol)
             }
             EntityType::Polyline(p) => {
                 if p.flags & (16 | 64) != 0 {
@@ -535,13 +584,33 @@ impl<'a> Walk<'a> {
                 {
                     return Err("a 3D polyline not in one XY plane".into());
                 }
-                Ok(polyline(&xf, &v, p.flags & 1 != 0, tol))
+                polyline(&xf, &v, p.flags & 1 != 0, tol)
             }
             EntityType::Spline(s) => spline(s, &ctx.xf, tol),
             EntityType::Ellipse(el) => ellipse(el, &ctx.xf, tol),
             _ => Err("not a contour".into()),
         }
     }
+}
+
+/// `end` moved on by whole turns of `turn` (360 degrees, or 2 pi) until it is past `start`,
+/// for a curve that runs counter-clockwise from `start`: in one step, not a turn at a time
+/// (which never ends at 1e20 degrees, where adding a turn changes nothing). `None` for an
+/// angle that is not finite or beyond a million turns (where a float no longer tells a
+/// degree).
+fn turn_past(start: f64, end: f64, turn: f64) -> Option<f64> {
+    let limit = 1e6 * turn;
+    if !(start.abs() <= limit && end.abs() <= limit) {
+        return None;
+    }
+    if end > start {
+        return Some(end);
+    }
+    let mut past = end + turn * (((start - end) / turn).floor() + 1.0);
+    if past <= start {
+        past += turn;
+    }
+    Some(past)
 }
 
 fn line(a: [f64; 2], b: [f64; 2]) -> Vec<Segment> {
@@ -565,7 +634,7 @@ fn arc(
     a0: f64,
     a1: f64,
     tol: f64,
-) -> (Vec<Segment>, bool, Option<String>) {
+) -> Result<(Vec<Segment>, bool, Option<String>), String> {
     let at = |t: f64| xf.apply([c[0] + r * t.cos(), c[1] + r * t.sin()]);
     if xf.is_conformal() {
         let sweep = a1 - a0;
@@ -585,7 +654,7 @@ fn arc(
                 }
             })
             .collect();
-        (segs, false, None)
+        Ok((segs, false, None))
     } else {
         let segs = fit_arcs(
             &Curve {
@@ -595,14 +664,14 @@ fn arc(
                 breaks: vec![],
             },
             tol,
-        );
-        (
+        )?;
+        Ok((
             segs,
             false,
             Some(format!(
                 "arc under a non-uniform block scale: an ellipse, fitted by arcs within {tol} mm"
             )),
-        )
+        ))
     }
 }
 
@@ -612,7 +681,7 @@ fn polyline(
     v: &[([f64; 2], f64)],
     closed: bool,
     tol: f64,
-) -> (Vec<Segment>, bool, Option<String>) {
+) -> Result<(Vec<Segment>, bool, Option<String>), String> {
     let mut v = v.to_vec();
     // a closing vertex repeated at the end
     if v.len() > 2 && v[0].0 == v[v.len() - 1].0 {
@@ -638,7 +707,7 @@ fn polyline(
                 });
             }
         }
-        return (out, closed && !v.is_empty(), None);
+        return Ok((out, closed && !v.is_empty(), None));
     }
     let mut note = None;
     for i in 0..count {
@@ -666,7 +735,7 @@ fn polyline(
             a0.min(a0 + s.sweep()),
             a0.max(a0 + s.sweep()),
             tol,
-        );
+        )?;
         note = note.or(n2);
         if s.sweep() > 0.0 {
             out.extend(segs);
@@ -674,7 +743,7 @@ fn polyline(
             out.extend(segs.iter().rev().map(|s| s.reversed()));
         }
     }
-    (out, closed && !v.is_empty(), note)
+    Ok((out, closed && !v.is_empty(), note))
 }
 
 fn spline(
@@ -720,7 +789,7 @@ fn spline(
                 breaks: n.breaks(),
             },
             tol,
-        );
+        )?;
         let closed = closed_flag || ends_meet(&segs);
         return Ok((segs, closed, Some(what)));
     }
@@ -741,7 +810,7 @@ fn spline(
                 breaks: i.breaks(),
             },
             tol,
-        );
+        )?;
         let closed = closed_flag || ends_meet(&segs);
         return Ok((
             segs,
@@ -781,10 +850,13 @@ fn ellipse(
     if !(m[0].hypot(m[1]) > 0.0 && el.minor_axis_ratio > 0.0) {
         return Ok((Vec::new(), false, None));
     }
-    let (t0, mut t1) = (el.start_parameter, el.end_parameter);
-    while t1 <= t0 {
-        t1 += std::f64::consts::TAU;
-    }
+    let t0 = el.start_parameter;
+    let mut t1 = turn_past(t0, el.end_parameter, std::f64::consts::TAU).ok_or_else(|| {
+        format!(
+            "start and end parameter {t0:?}, {:?}: not finite, or beyond a million turns",
+            el.end_parameter
+        )
+    })?;
     let full = (t1 - t0) >= std::f64::consts::TAU - 1e-9;
     if full {
         t1 = t0 + std::f64::consts::TAU;
@@ -804,7 +876,7 @@ fn ellipse(
             breaks: vec![],
         },
         tol,
-    );
+    )?;
     if full {
         if let (Some(first), Some(last)) = (segs.first().copied(), segs.last_mut()) {
             last.end = first.start;
