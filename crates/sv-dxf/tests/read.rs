@@ -292,18 +292,18 @@ fn an_insert_array_past_the_entity_limit_is_skipped_with_a_note() {
     assert_eq!(read.parts.len(), 6);
 }
 
-/// A curve that needs more samples than the reader takes (a nanometre arc tolerance, a
+/// A curve that needs more samples than the reader takes (a picometre arc tolerance, a
 /// 100 km ellipse) was sampled for minutes into gigabytes.
 #[test]
 fn a_curve_too_large_for_the_arc_tolerance_is_skipped_with_a_note() {
     let ellipse = "0\nELLIPSE\n8\n0\n10\n0\n20\n0\n30\n0\n11\n40\n21\n0\n31\n0\n40\n0.5\n41\n0\n42\n6.283185307179586\n";
     let options = ReadOptions {
-        arc_tolerance: 1e-9,
+        arc_tolerance: 1e-12,
         ..ReadOptions::default()
     };
     let notes = notes_of(ellipse, &options);
     assert!(
-        notes.contains(&"f.dxf: skipped: too large for the arc tolerance 0.000000001 mm (over 1048576 samples): drawn in the wrong units, or a corrupt number?: layer 0: ELLIPSE #1".to_string()),
+        notes.contains(&"f.dxf: skipped: too large for the arc tolerance 0.000000000001 mm (the file's curves need over 4194304 samples): drawn in the wrong units, or a corrupt number?: layer 0: ELLIPSE #1".to_string()),
         "{notes:?}"
     );
     // at the default tolerance it is a part
@@ -337,4 +337,55 @@ fn parser_failures_are_one_line_errors() {
         .to_string();
     assert!(err.len() < 300 && err.contains("xxx...xxx"), "{err}");
     assert!(err.ends_with("at line/offset 1"), "{err}");
+}
+
+/// The samples are the file's, not each curve's: 20 ellipses of 30 km (a million samples each
+/// at the default tolerance) fit until the file's samples run out, the rest are skipped
+/// (a block that inserts itself scaled by 2 gave thousands of such curves: hours).
+#[test]
+fn the_curve_samples_are_counted_for_the_whole_file() {
+    let ellipses: String = (0..20)
+        .map(|k| {
+            format!(
+                "0\nELLIPSE\n8\n0\n10\n{}\n20\n0\n30\n0\n11\n3e7\n21\n0\n31\n0\n40\n0.5\n41\n0\n42\n6.283185307179586\n",
+                1e8 * k as f64
+            )
+        })
+        .collect();
+    let text = with_units(4, &ellipses);
+    let read = read_dxf(text.as_bytes(), "f.dxf", &ReadOptions::default()).unwrap();
+    let skipped = read
+        .notes
+        .iter()
+        .find(|n| {
+            n.what
+                .contains("the file's curves need over 4194304 samples")
+        })
+        .unwrap_or_else(|| panic!("{:?}", read.notes));
+    assert!(
+        !read.parts.is_empty() && read.parts.len() + skipped.entities.len() == 20,
+        "{} parts, {:?}",
+        read.parts.len(),
+        skipped
+    );
+}
+
+/// A layer or line type name is the file's text: control characters in it (a binary DXF
+/// string, a stray byte) were written into notes and rejections as they are.
+#[test]
+fn layer_names_with_control_characters_stay_on_one_line() {
+    let open = "0\nLINE\n8\nA\x0bB\n10\n0\n20\n0\n11\n10\n21\n0\n";
+    let text = with_units(4, open);
+    let read = read_dxf(text.as_bytes(), "f.dxf", &ReadOptions::default()).unwrap();
+    let why = read.rejected[0].to_string();
+    assert!(
+        why.starts_with("part f.dxf (layer A\\u{b}B: LINE #1): open contour"),
+        "{why}"
+    );
+    let dashed = "0\nLINE\n8\n0\n6\nDASH\x07\n10\n0\n20\n0\n11\n10\n21\n0\n";
+    let notes = notes_of(dashed, &ReadOptions::default());
+    assert!(
+        notes.contains(&"f.dxf: skipped: dashed line type DASH\\u{7}: a construction or bend line, not cut: layer 0: LINE #1".to_string()),
+        "{notes:?}"
+    );
 }

@@ -3,6 +3,8 @@
 //! never sees a spline: adaptive sampling, then a greedy fit of the longest arc through
 //! consecutive samples that stays within the tolerance of all of them.
 
+use std::cell::Cell;
+
 use sv_geom::Segment;
 
 /// A parametric curve `t -> [x, y]` over `[t0, t1]`, smooth between `breaks`.
@@ -14,14 +16,16 @@ pub(crate) struct Curve<'a> {
     pub(crate) breaks: Vec<f64>,
 }
 
-/// Most samples of one curve: a circle of 30 km radius at the default arc tolerance. A
-/// curve that needs more is huge for its tolerance (wrong units, a corrupt number, a
-/// tolerance of nanometres), and sampling it would take minutes and gigabytes.
-pub(crate) const MAX_SAMPLES: usize = 1 << 20;
+/// Most samples of the curves of one file, all fits together (about a second of work): a
+/// circle of 500 km radius at the default arc tolerance, or thousands of ordinary curves.
+/// A file that needs more holds curves huge for their tolerance (wrong units, a corrupt
+/// number, a tolerance of nanometres, a block that inserts itself scaled), and sampling
+/// them would take hours and gigabytes.
+pub(crate) const MAX_SAMPLES: usize = 1 << 22;
 
 /// Samples of `curve` so dense that between two of them the curve stays within
-/// `tolerance / 8` of their chord; `None` beyond [`MAX_SAMPLES`].
-fn samples(curve: &Curve<'_>, tolerance: f64) -> Option<Vec<[f64; 2]>> {
+/// `tolerance / 8` of their chord; `None` beyond `budget` samples.
+fn samples(curve: &Curve<'_>, tolerance: f64, budget: usize) -> Option<Vec<[f64; 2]>> {
     let mut ts = vec![curve.t0];
     ts.extend(
         curve
@@ -38,7 +42,7 @@ fn samples(curve: &Curve<'_>, tolerance: f64) -> Option<Vec<[f64; 2]>> {
         for k in 0..n {
             let a = w[0] + (w[1] - w[0]) * k as f64 / n as f64;
             let b = w[0] + (w[1] - w[0]) * (k + 1) as f64 / n as f64;
-            refine(curve, a, b, tolerance / 8.0, 0, &mut out)?;
+            refine(curve, a, b, tolerance / 8.0, 0, budget, &mut out)?;
         }
     }
     Some(out)
@@ -50,9 +54,10 @@ fn refine(
     b: f64,
     tol: f64,
     depth: u32,
+    budget: usize,
     out: &mut Vec<[f64; 2]>,
 ) -> Option<()> {
-    if out.len() > MAX_SAMPLES {
+    if out.len() > budget {
         return None;
     }
     let (pa, pb) = (*out.last().unwrap_or(&(curve.at)(a)), (curve.at)(b));
@@ -66,8 +71,8 @@ fn refine(
         .map(|&p| sv_geom::planar::point_segment_distance(p, pa, pb))
         .fold(0.0, f64::max);
     if depth < 24 && off > tol {
-        refine(curve, a, m, tol, depth + 1, out)?;
-        refine(curve, m, b, tol, depth + 1, out)?;
+        refine(curve, a, m, tol, depth + 1, budget, out)?;
+        refine(curve, m, b, tol, depth + 1, budget, out)?;
     } else {
         out.push(pb);
     }
@@ -141,14 +146,20 @@ fn fit(p: &[[f64; 2]], i: usize, j: usize, tol: f64) -> Option<Segment> {
     })
 }
 
-/// Arcs and lines within `tolerance` (mm) of `curve`, from its start to its end; an
-/// error naming the size when the curve needs more than [`MAX_SAMPLES`] samples.
-pub(crate) fn fit_arcs(curve: &Curve<'_>, tolerance: f64) -> Result<Vec<Segment>, String> {
-    let p = samples(curve, tolerance).ok_or_else(|| {
+/// Arcs and lines within `tolerance` (mm) of `curve`, from its start to its end, taking
+/// its samples from `samples_left` (the file's, from [`MAX_SAMPLES`]); an error when they
+/// run out.
+pub(crate) fn fit_arcs(
+    curve: &Curve<'_>,
+    tolerance: f64,
+    samples_left: &Cell<usize>,
+) -> Result<Vec<Segment>, String> {
+    let p = samples(curve, tolerance, samples_left.get()).ok_or_else(|| {
         format!(
-            "too large for the arc tolerance {tolerance} mm (over {MAX_SAMPLES} samples): drawn in the wrong units, or a corrupt number?"
+            "too large for the arc tolerance {tolerance} mm (the file's curves need over {MAX_SAMPLES} samples): drawn in the wrong units, or a corrupt number?"
         )
     })?;
+    samples_left.set(samples_left.get().saturating_sub(p.len()));
     let tol = tolerance / 2.0;
     let n = p.len() - 1;
     let mut out = Vec::new();
@@ -425,7 +436,7 @@ mod tests {
             t1: std::f64::consts::TAU,
             breaks: vec![],
         };
-        let segs = fit_arcs(&curve, 0.01).unwrap();
+        let segs = fit_arcs(&curve, 0.01, &Cell::new(MAX_SAMPLES)).unwrap();
         assert!(
             segs.len() < 60 && segs.iter().all(|s| s.bulge != 0.0),
             "{}",
@@ -472,6 +483,7 @@ mod tests {
                     breaks: n.breaks(),
                 },
                 0.01,
+                &Cell::new(MAX_SAMPLES),
             )
             .unwrap()
         };

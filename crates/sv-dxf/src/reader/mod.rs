@@ -128,7 +128,7 @@ fn entity_list(entities: &[EntityRef]) -> String {
     for ((layer, entity), handles) in by {
         if last_layer != Some(layer) {
             s.push_str(if last_layer.is_none() { ": " } else { "; " });
-            s.push_str(&format!("layer {layer}: "));
+            s.push_str(&format!("layer {}: ", printable(layer)));
             last_layer = Some(layer);
         } else {
             s.push_str(", ");
@@ -240,29 +240,28 @@ fn load(bytes: &[u8]) -> Result<dxf::Drawing, String> {
             }
         };
     let chars: Vec<char> = message.chars().collect();
+    if chars.len() <= PARSER_MESSAGE_CHARS {
+        return Err(printable(&message));
+    }
     // the start and the end (where the place is), the quoted middle cut out
-    let (head, tail) = if chars.len() > PARSER_MESSAGE_CHARS {
-        (
-            &chars[..PARSER_MESSAGE_CHARS / 2],
-            &chars[chars.len() - PARSER_MESSAGE_CHARS / 2..],
-        )
-    } else {
-        (&chars[..], &chars[..0])
-    };
-    let mut out = String::new();
-    for (k, part) in [head, tail].into_iter().enumerate() {
-        if k == 1 && !part.is_empty() {
-            out.push_str("...");
-        }
-        for &c in part {
-            if c.is_control() {
-                out.extend(c.escape_debug());
-            } else {
-                out.push(c);
-            }
+    let half = PARSER_MESSAGE_CHARS / 2;
+    let head: String = chars[..half].iter().collect();
+    let tail: String = chars[chars.len() - half..].iter().collect();
+    Err(format!("{}...{}", printable(&head), printable(&tail)))
+}
+
+/// `text` from the file (a layer name, a parser message quoting a line) with its control
+/// characters escaped, so that a message stays on one line.
+fn printable(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() {
+            out.extend(c.escape_debug());
+        } else {
+            out.push(c);
         }
     }
-    Err(out)
+    out
 }
 
 /// Reads a DXF file's bytes (ASCII or binary); `name` names the file in messages and

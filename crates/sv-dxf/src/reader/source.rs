@@ -3,13 +3,15 @@
 //! world-coordinate pieces: open segments to chain, closed contours, etching, text
 //! positions, and a note for every entity that is not read.
 
+use std::cell::Cell;
 use std::collections::{BTreeMap, HashMap};
 
 use dxf::entities::{Entity, EntityType};
 use sv_geom::{Contour, Segment, Vertex};
 
-use super::fit::{fit_arcs, Curve, Interpolant, Nurbs};
+use super::fit::{fit_arcs, Curve, Interpolant, Nurbs, MAX_SAMPLES};
 use super::layers::{LayerRole, LayerRules};
+use super::printable;
 use super::xform::{ocs, Affine};
 
 /// Where a piece came from: layer, entity type and handle (with the INSERTs it came
@@ -74,6 +76,8 @@ pub(crate) struct Walk<'a> {
     pub(crate) dashed: Vec<String>,
     pub(crate) rules: &'a LayerRules,
     pub(crate) arc_tolerance: f64,
+    /// samples the curve fits may still take ([`MAX_SAMPLES`] for the file)
+    samples_left: Cell<usize>,
     /// whether the file has handles (else entities are named by their position)
     pub(crate) handles: bool,
     pub(crate) out: Collected,
@@ -181,6 +185,7 @@ impl<'a> Walk<'a> {
             dashed,
             rules,
             arc_tolerance,
+            samples_left: Cell::new(MAX_SAMPLES),
             handles,
             out: Collected::default(),
             count: 0,
@@ -314,7 +319,10 @@ impl<'a> Walk<'a> {
             self.skip(
                 &layer,
                 k,
-                &format!("dashed line type {lt}: a construction or bend line, not cut"),
+                &format!(
+                    "dashed line type {}: a construction or bend line, not cut",
+                    printable(&lt)
+                ),
                 handle,
             );
             return;
@@ -504,6 +512,7 @@ impl<'a> Walk<'a> {
     fn drawn(&self, e: &Entity, ctx: &Ctx) -> Result<(Vec<Segment>, bool, Option<String>), String> {
         let tilted = || "not in the XY plane (tilted extrusion direction)".to_string();
         let tol = self.arc_tolerance;
+        let left = &self.samples_left;
         match &e.specific {
             EntityType::Line(l) => {
                 let (a, b) = (ctx.xf.apply(xy(&l.p1)), ctx.xf.apply(xy(&l.p2)));
@@ -527,6 +536,7 @@ impl<'a> Walk<'a> {
                     a0.to_radians(),
                     a1.to_radians(),
                     tol,
+                    left,
                 )
             }
             EntityType::Circle(c) => {
@@ -534,8 +544,15 @@ impl<'a> Walk<'a> {
                 if c.radius.is_nan() || c.radius <= 0.0 {
                     return Ok((Vec::new(), true, None));
                 }
-                let (mut segs, _, note) =
-                    arc(&xf, xy(&c.center), c.radius, 0.0, std::f64::consts::PI, tol)?;
+                let (mut segs, _, note) = arc(
+                    &xf,
+                    xy(&c.center),
+                    c.radius,
+                    0.0,
+                    std::f64::consts::PI,
+                    tol,
+                    left,
+                )?;
                 let (more, _, _) = arc(
                     &xf,
                     xy(&c.center),
@@ -543,6 +560,7 @@ impl<'a> Walk<'a> {
                     std::f64::consts::PI,
                     std::f64::consts::TAU,
                     tol,
+                    left,
                 )?;
                 segs.extend(more);
                 Ok((segs, true, note))
@@ -553,7 +571,7 @@ impl<'a> Walk<'a> {
                     .then(&ocs(xyz(&p.extrusion_direction)).ok_or_else(tilted)?);
                 let v: Vec<([f64; 2], f64)> =
                     p.vertices.iter().map(|v| ([v.x, v.y], v.bulge)).collect();
-                polyline(&xf, &v, p.is_closed(), tol)
+                polyline(&xf, &v, p.is_closed(), tol, left)
             }
             EntityType::Polyline(p) => {
                 if p.flags & (16 | 64) != 0 {
@@ -584,10 +602,10 @@ impl<'a> Walk<'a> {
                 {
                     return Err("a 3D polyline not in one XY plane".into());
                 }
-                polyline(&xf, &v, p.flags & 1 != 0, tol)
+                polyline(&xf, &v, p.flags & 1 != 0, tol, left)
             }
-            EntityType::Spline(s) => spline(s, &ctx.xf, tol),
-            EntityType::Ellipse(el) => ellipse(el, &ctx.xf, tol),
+            EntityType::Spline(s) => spline(s, &ctx.xf, tol, left),
+            EntityType::Ellipse(el) => ellipse(el, &ctx.xf, tol, left),
             _ => Err("not a contour".into()),
         }
     }
@@ -634,6 +652,7 @@ fn arc(
     a0: f64,
     a1: f64,
     tol: f64,
+    left: &Cell<usize>,
 ) -> Result<(Vec<Segment>, bool, Option<String>), String> {
     let at = |t: f64| xf.apply([c[0] + r * t.cos(), c[1] + r * t.sin()]);
     if xf.is_conformal() {
@@ -664,6 +683,7 @@ fn arc(
                 breaks: vec![],
             },
             tol,
+            left,
         )?;
         Ok((
             segs,
@@ -681,12 +701,13 @@ fn polyline(
     v: &[([f64; 2], f64)],
     closed: bool,
     tol: f64,
+    left: &Cell<usize>,
 ) -> Result<(Vec<Segment>, bool, Option<String>), String> {
     let mut v = v.to_vec();
     // a closing vertex repeated at the end
     if v.len() > 2 && v[0].0 == v[v.len() - 1].0 {
         v.pop();
-        return polyline(xf, &v, true, tol);
+        return polyline(xf, &v, true, tol, left);
     }
     let n = v.len();
     let count = if closed { n } else { n.saturating_sub(1) };
@@ -735,6 +756,7 @@ fn polyline(
             a0.min(a0 + s.sweep()),
             a0.max(a0 + s.sweep()),
             tol,
+            left,
         )?;
         note = note.or(n2);
         if s.sweep() > 0.0 {
@@ -750,6 +772,7 @@ fn spline(
     s: &dxf::entities::Spline,
     xf: &Affine,
     tol: f64,
+    left: &Cell<usize>,
 ) -> Result<(Vec<Segment>, bool, Option<String>), String> {
     if s.fit_points.iter().chain(&s.control_points).any(|p| {
         (p.z - s
@@ -789,6 +812,7 @@ fn spline(
                 breaks: n.breaks(),
             },
             tol,
+            left,
         )?;
         let closed = closed_flag || ends_meet(&segs);
         return Ok((segs, closed, Some(what)));
@@ -810,6 +834,7 @@ fn spline(
                 breaks: i.breaks(),
             },
             tol,
+            left,
         )?;
         let closed = closed_flag || ends_meet(&segs);
         return Ok((
@@ -834,6 +859,7 @@ fn ellipse(
     el: &dxf::entities::Ellipse,
     xf: &Affine,
     tol: f64,
+    left: &Cell<usize>,
 ) -> Result<(Vec<Segment>, bool, Option<String>), String> {
     let n = xyz(&el.normal);
     if ocs(n).is_none() {
@@ -876,6 +902,7 @@ fn ellipse(
             breaks: vec![],
         },
         tol,
+        left,
     )?;
     if full {
         if let (Some(first), Some(last)) = (segs.first().copied(), segs.last_mut()) {
