@@ -16,9 +16,15 @@ use sv_geom::Point3;
 
 use crate::obj::parse_obj;
 use crate::stl::{binary_stl_size, read_ascii_stl, read_binary_stl};
-use crate::text::{decode, is_binary_char};
+use crate::text::{decode, is_binary_char, real};
 use crate::tri_mesh::{read_tri_mesh, weld_indexed, WELD_RELATIVE_TOLERANCE};
 use crate::{IoError, TriMesh};
+
+/// Farthest a target's coordinate may be from the origin (mm): a million km, room for
+/// site coordinates (a UTM northing is 5e9 mm) at a float resolution of 0.1 um. Beyond it
+/// the size and areas of the surface overflow (a vertex at 1e308 made the zero-area check
+/// pass on NaN).
+const MAX_COORDINATE: f64 = 1e12;
 
 /// What reading a target repaired.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -65,15 +71,33 @@ pub fn read_target(bytes: &[u8], name: &str) -> Result<TargetFile, IoError> {
     // the plain reader's errors (syntax, numbers, truncation) come first
     let plain = read_tri_mesh(bytes, name)?;
     let (corners, places, numbers) = located_soup(bytes, name, &plain)?;
+    // corner `k` of soup triangle `t` as the file names it
+    let corner_name = |t: usize, k: usize| match numbers.get(t) {
+        Some(n) => format!("vertex {}", n[k]),
+        None => format!("corner {} of {}", k + 1, places[t].describe()),
+    };
+    // the surface's size, the weld tolerance and areas are finite numbers: no vertex far out
+    for (t, tri) in corners.iter().enumerate() {
+        if let Some(k) = tri
+            .iter()
+            .position(|p| p.iter().any(|x| x.abs() > MAX_COORDINATE))
+        {
+            let p = tri[k];
+            return Err(IoError::whole(
+                name,
+                format!(
+                    "{} at ({}, {}, {}) is farther than {MAX_COORDINATE:e} mm from the origin (a corrupt number, or not in mm?)",
+                    corner_name(t, k),
+                    real(p.x),
+                    real(p.y),
+                    real(p.z)
+                ),
+            ));
+        }
+    }
     let (mut mesh, first, dropped) = weld_indexed(&corners, WELD_RELATIVE_TOLERANCE);
     // the file's vertex number of every welded vertex (its first occurrence)
-    let vertex_name: Vec<String> = first
-        .iter()
-        .map(|&(t, k)| match numbers.get(t) {
-            Some(n) => format!("vertex {}", n[k]),
-            None => format!("corner {} of {}", k + 1, places[t].describe()),
-        })
-        .collect();
+    let vertex_name: Vec<String> = first.iter().map(|&(t, k)| corner_name(t, k)).collect();
     let kept: Vec<Place> = places
         .iter()
         .enumerate()
@@ -336,5 +360,19 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("closed"), "{e}");
+    }
+
+    /// A vertex at 1e308 overflowed the bounding box, the zero-area check passed on NaN and
+    /// the target was read, its areas infinite.
+    #[test]
+    fn a_vertex_far_out_is_refused_not_read_as_nan() {
+        let text = "v 0 0 0\nv 1 0 0\nv 1e308 -1e308 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+        let e = read_target(text.as_bytes(), "t.obj")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "t.obj: vertex 3 at (1e308, -1e308, 0) is farther than 1e12 mm from the origin (a corrupt number, or not in mm?)");
+        // site coordinates (a UTM northing in mm) are read
+        let text = "v 0 5e9 0\nv 1 5e9 0\nv 1 5000000001 0\nf 1 2 3\n";
+        assert!(read_target(text.as_bytes(), "t.obj").is_ok());
     }
 }

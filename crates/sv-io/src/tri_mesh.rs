@@ -31,7 +31,8 @@ pub struct TriMesh {
 ///   header announces, not by the `solid` keyword (many binary files start with it).
 /// - **ASCII STL** is text whose first word is `solid`.
 /// - Anything else is read as **OBJ**; its polygons are fan-triangulated
-///   (`a b c d` gives `a b c`, `a c d`).
+///   (`a b c d` gives `a b c`, `a c d`), and a triangle that lists a vertex twice (of a
+///   face such as `f 1 2 3 1`) is dropped.
 ///
 /// STL lists every triangle's corners separately; they are welded when they coincide
 /// exactly or within [`WELD_RELATIVE_TOLERANCE`] of the bounding-box diagonal, and
@@ -106,8 +107,21 @@ pub fn read_tri_mesh(bytes: &[u8], name: &str) -> Result<TriMesh, IoError> {
             ));
         }
         for k in 1..v.len() - 1 {
-            triangles.push([v[0], v[k], v[k + 1]]);
+            let t = [v[0], v[k], v[k + 1]];
+            // a face that lists a vertex twice (`f 1 2 3 1`) has collapsed triangles
+            if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+                triangles.push(t);
+            }
         }
+    }
+    if triangles.is_empty() {
+        return Err(IoError::whole(
+            name,
+            format!(
+                "all {} faces are degenerate (each lists a vertex twice)",
+                data.faces.len()
+            ),
+        ));
     }
     Ok(TriMesh {
         vertices: data.vertices,
@@ -323,6 +337,19 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "t.obj: not an OBJ or STL file (line 1: 'what is this')"
+        );
+    }
+
+    /// An OBJ face that lists a vertex twice (`f 1 1 2`, or `f 1 2 3 1` closing its loop) gave
+    /// triangles such as [0, 0, 1], against the promise of three distinct indices.
+    #[test]
+    fn obj_triangles_that_repeat_a_vertex_are_dropped() {
+        let m = read_tri_mesh(b"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3 1\nf 2 2 3\n", "t.obj").unwrap();
+        assert_eq!(m.triangles, vec![[0, 1, 2]]);
+        let e = read_tri_mesh(b"v 0 0 0\nv 1 0 0\nf 1 2 2\nf 1 1 1\n", "t.obj").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.obj: all 2 faces are degenerate (each lists a vertex twice)"
         );
     }
 
