@@ -443,16 +443,18 @@ pub struct ConfigFile {
 
 /// Read a config file's text; errors are one line naming `name:line:column`.
 pub fn read(text: &str, name: &str) -> Result<ConfigFile> {
-    let config: BuildConfig = toml::from_str(text).map_err(|e| {
+    let located = |e: toml::de::Error| {
         let (line, column) = e
             .span()
             .map(|span| line_column(text, span.start))
             .unwrap_or((1, 1));
         let message = e.message().replace(['\n', '\r'], " ");
         anyhow!("{name}:{line}:{column}: {}", message.trim_end_matches('.'))
-    })?;
-    // valid as a BuildConfig, so valid TOML
-    let table: toml::Table = toml::from_str(text).map_err(|e| anyhow!("{name}: {e}"))?;
+    };
+    let config: BuildConfig = toml::from_str(text).map_err(located)?;
+    // valid as a BuildConfig, and valid TOML but for an integer past i64 (`seed =
+    // 18446744073709551615` is a u64 but no TOML integer)
+    let table: toml::Table = toml::from_str(text).map_err(located)?;
     let sets_profile = match table.get("profile") {
         Some(toml::Value::Table(profile)) => {
             check_profile_keys(profile, text, name)?;
@@ -608,6 +610,17 @@ mod tests {
         ] {
             let c = parse(&format!("[primary]\n{key} = {value}\n"), "c.toml").unwrap();
             assert!(c.primary.to_solve_options().is_err(), "{key} = {value}");
+        }
+    }
+
+    /// An integer past i64 reads as a u64 seed or an f64 but is no TOML integer: the
+    /// second read (as a table) failed with toml's multi-line report (source line, caret).
+    #[test]
+    fn an_integer_past_i64_is_a_one_line_error() {
+        for (key, at) in [("seed", "c.toml:3:8"), ("margin", "c.toml:3:10")] {
+            let text = format!("[nest]\nsheets = [\"3000x1500\"]\n{key} = 18446744073709551615\n");
+            let e = parse(&text, "c.toml").unwrap_err().to_string();
+            assert_eq!(e, format!("{at}: u64 value was too large"));
         }
     }
 }
