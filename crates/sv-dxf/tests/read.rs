@@ -285,7 +285,7 @@ fn an_insert_array_past_the_entity_limit_is_skipped_with_a_note() {
     let read = read_dxf(text.as_bytes(), "f.dxf", &ReadOptions::default()).unwrap();
     let notes: Vec<String> = read.notes.iter().map(|n| n.to_string()).collect();
     assert!(
-        notes.contains(&"f.dxf: skipped: 30000 x 30000 copies of block \"C\" (1 entities) take the file past 50000 entities: layer 0: INSERT #1".to_string()),
+        notes.contains(&"f.dxf: skipped: 30000 x 30000 copies of block \"C\" (1 entities) take the file past 200000 entities: layer 0: INSERT #1".to_string()),
         "{notes:?}"
     );
     // the small array is read

@@ -101,9 +101,10 @@ struct Ctx {
 const MAX_DEPTH: usize = 32;
 
 /// Most entities read, block copies counted: an INSERT whose array or nesting would go past
-/// it is skipped (a 30000 x 30000 array is a billion copies, not a part drawing; a part
-/// drawing has hundreds, a full sheet thousands).
-const MAX_ENTITIES: usize = 50_000;
+/// it is skipped (a 30000 x 30000 array is a billion copies, not a drawing). A part
+/// drawing has hundreds, a full sheet thousands, a shop's whole job tens of thousands:
+/// the limit leaves room for any of them (200,000 circles read in about 1.5 s).
+const MAX_ENTITIES: usize = 200_000;
 
 /// Farthest a drawn point may be from the origin (mm), 1000 km: beyond it a drawing is in
 /// the wrong units or holds a corrupt number, and areas and the chaining grid overflow.
