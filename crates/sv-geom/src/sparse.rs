@@ -177,6 +177,8 @@ impl SpdSolver {
 /// assembled one residual at a time ([`NormalEquations::row`]) in the same order every
 /// iteration. The first assembly records the pattern and analyses it; later ones scatter
 /// each product straight to its compressed position (rows of weight 0 are skipped in O(1)).
+/// Every assembly's rows must name the same columns in the same order as the first's
+/// (checked: a fingerprint of the columns).
 pub struct NormalEquations {
     n: usize,
     first: bool,
@@ -184,6 +186,9 @@ pub struct NormalEquations {
     first_values: Vec<f64>,
     pos: Vec<u32>,
     cursor: usize,
+    /// the columns of the current assembly's rows, and of the first's
+    columns: u64,
+    pattern_columns: u64,
     values: Vec<f64>,
     solver: Option<SpdSolver>,
     /// `-J^T W r`, the right-hand side of the current assembly.
@@ -202,6 +207,8 @@ impl NormalEquations {
             first_values: Vec::new(),
             pos: Vec::new(),
             cursor: 0,
+            columns: 0,
+            pattern_columns: 0,
             values: Vec::new(),
             solver: None,
             rhs: vec![0.0; n],
@@ -215,6 +222,7 @@ impl NormalEquations {
         self.rhs.iter_mut().for_each(|r| *r = 0.0);
         self.energy = 0.0;
         self.cursor = 0;
+        self.columns = 0;
         for i in 0..self.n {
             self.entry(i, i, regulariser);
         }
@@ -231,8 +239,20 @@ impl NormalEquations {
         self.cursor += 1;
     }
 
+    /// Fold a row's columns into [`NormalEquations::columns`] (FNV-1a over the indices
+    /// and a row end).
+    fn fingerprint(&mut self, cols: &[usize]) {
+        const PRIME: u64 = 0x0000_0100_0000_01b3;
+        let mut h = self.columns ^ 0xcbf2_9ce4_8422_2325;
+        for &c in cols.iter().chain(&[usize::MAX]) {
+            h = (h ^ c as u64).wrapping_mul(PRIME);
+        }
+        self.columns = h;
+    }
+
     /// One residual `r` with gradient `vals` over distinct columns `cols`, weight `w`.
     pub fn row(&mut self, cols: &[usize], vals: &[f64], r: f64, w: f64) {
+        self.fingerprint(cols);
         let m = cols.len();
         if w == 0.0 && !self.first {
             self.cursor += m * (m + 1) / 2;
@@ -252,6 +272,7 @@ impl NormalEquations {
     /// as in [`NormalEquations::row`], `vals` one value per column. One pass over the
     /// block's `m (m + 1) / 2` entries, however many rows it has.
     pub fn block(&mut self, cols: &[usize], rows: &[(&[f64], f64, f64)]) {
+        self.fingerprint(cols);
         let m = cols.len();
         // the Gram matrix of the rows that weigh, upper triangle, row by row
         let mut gram = vec![0.0; m * m];
@@ -294,13 +315,14 @@ impl NormalEquations {
             solver.set_values(&self.first_values);
             self.pos = solver.positions().to_vec();
             self.values = solver.values_mut().to_vec();
+            self.pattern_columns = self.columns;
             self.first = false;
             self.pattern = Vec::new();
             self.first_values = Vec::new();
             self.solver = Some(solver);
-        } else if self.cursor != self.pos.len() {
+        } else if self.cursor != self.pos.len() || self.columns != self.pattern_columns {
             return Err(SparseError(format!(
-                "assembly of {} entries does not match the pattern of {}",
+                "assembly of {} entries does not match the pattern of {} (rows over other columns than the first assembly's)",
                 self.cursor,
                 self.pos.len()
             )));
@@ -347,6 +369,26 @@ mod tests {
         let mut x = [1.0, 1.0];
         assert!(!solver.solve(&mut x).unwrap());
         assert!(SpdSolver::new(2, &[(0, 2)]).is_err());
+    }
+
+    #[test]
+    fn an_assembly_over_other_columns_is_refused() {
+        // the same number of entries, the rows' columns swapped: the first pattern's
+        // positions would put each product in the other's place
+        let mut ne = NormalEquations::new(2);
+        let mut dx = [0.0; 2];
+        for (k, cols) in [[0, 1], [0, 1], [1, 0]].iter().enumerate() {
+            ne.reset(0.0);
+            ne.row(&[cols[0]], &[1.0], 1.0, 1.0);
+            ne.row(&[cols[1]], &[2.0], 1.0, 1.0);
+            let solved = ne.solve(&mut dx);
+            if k < 2 {
+                assert!(solved.unwrap(), "assembly {k}");
+            } else {
+                let e = solved.unwrap_err().0;
+                assert!(e.contains("does not match the pattern"), "{e}");
+            }
+        }
     }
 
     #[test]

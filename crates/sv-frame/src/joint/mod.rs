@@ -207,12 +207,16 @@ fn unit_error(f: usize, e: UnitFailure) -> FrameError {
 }
 
 /// Levenberg-Marquardt on `problem` from `x` (plates at `poses`) for at most `budget`
-/// iterations, on normal equations of its own: steps within a trust region of MAX_STEP of
-/// the side, the anchors taken again after every step; where it stalls, the joints outside
-/// their limits weigh more and it goes on. Adds the iterations used to `done` (progress is
-/// reported from there) and returns the units at the end.
+/// iterations, on the normal equations `ne` (the same problem's every time, so that its
+/// pattern and the analysis of it are kept from one call to the next): steps within a
+/// trust region of MAX_STEP of the side, the anchors taken again after every step; where
+/// it stalls, the joints outside their limits weigh more and it goes on. Adds the
+/// iterations used to `done` (progress is reported from there) and returns the units at
+/// the end.
+#[allow(clippy::too_many_arguments)]
 fn descend(
     problem: &mut Problem<'_>,
+    ne: &mut NormalEquations,
     x: &mut Vec<Real>,
     poses: &mut Vec<PlatePose>,
     budget: usize,
@@ -220,7 +224,6 @@ fn descend(
     done: &mut usize,
     progress: &mut dyn FnMut(usize, Real),
 ) -> Result<Vec<UnitPoints>, FrameError> {
-    let mut ne = NormalEquations::new(x.len());
     let nf = problem.faces.len();
     let moves = 3 * problem.nv + UNIT_COLUMNS * nf;
     let scale = problem.model.scale;
@@ -234,7 +237,7 @@ fn descend(
     while iterations < budget {
         iterations += 1;
         ne.reset(1e-9);
-        problem.visit(x, &units, &mut ne);
+        problem.visit(x, &units, ne);
         let mut accepted = None;
         for _ in 0..40 {
             if !ne
@@ -481,6 +484,9 @@ pub fn close_joints(
         problem.pieces.push((piece, now * p.room));
     }
     let start = problem.figures(&x, &units);
+    // one set of normal equations for every round: the rows keep their columns whatever
+    // their weights, so the pattern and its analysis are the same throughout
+    let mut ne = NormalEquations::new(n);
     let mut iterations = 0;
     let mut demoted = Vec::new();
     // the iterations of the stages; the rest are the legs' polish
@@ -497,6 +503,7 @@ pub fn close_joints(
         };
         units = descend(
             &mut problem,
+            &mut ne,
             &mut x,
             &mut poses,
             budget,
@@ -516,6 +523,7 @@ pub fn close_joints(
             problem.legs = legs;
             units = descend(
                 &mut problem,
+                &mut ne,
                 &mut x,
                 &mut poses,
                 polish / LEG_POLISH.len(),
@@ -553,6 +561,7 @@ pub fn close_joints(
         problem.legs = 1.0;
         units = descend(
             &mut problem,
+            &mut ne,
             &mut x,
             &mut poses,
             options.split_iterations,
