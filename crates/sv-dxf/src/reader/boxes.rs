@@ -1,76 +1,47 @@
-//! Which boxes hold a point: a uniform grid over axis-aligned boxes, so that a file of
+//! Which boxes hold a point: uniform grids over axis-aligned boxes, so that a file of
 //! thousands of contours finds the few that matter to each one (repeats, the contour
 //! around it, the part an etched line lies on) without a pass over all of them.
+//!
+//! A box goes on the finest grid where it spans at most [`MAX_CELLS_PER_BOX`] cells; each
+//! grid's cells are [`COARSER`] times wider than the one before. So a drawing border, or
+//! thousands of overlapping copies of a large contour, sit on a coarse grid with few
+//! cells, and a point is looked up in one cell per grid.
 
-/// Boxes `(lo, hi)` on a uniform grid; [`BoxIndex::at`] lists those that may hold a point.
+/// Boxes `(lo, hi)` on uniform grids; [`BoxIndex::at`] lists those that may hold a point.
 pub(crate) struct BoxIndex {
+    /// the grids, finest first
+    grids: Vec<Grid>,
+    /// boxes with a coordinate that is not finite: tried always
+    unplaced: Vec<usize>,
+}
+
+/// One grid of [`BoxIndex`].
+struct Grid {
     origin: [f64; 2],
     cell: f64,
     cols: usize,
     rows: usize,
     /// box indices per cell, row-major
     cells: Vec<Vec<usize>>,
-    /// boxes spanning too many cells to register in each (a drawing border): tried always
-    wide: Vec<usize>,
 }
 
-/// Cells a box may span before it goes to [`BoxIndex::wide`].
+/// Cells a box may span on a grid before it goes to a coarser one.
 const MAX_CELLS_PER_BOX: usize = 64;
 
-impl BoxIndex {
-    /// An index of `boxes`, each grown by `grow` on every side; the grid's cell is about
-    /// the median box size, so a box spans a few cells.
-    pub(crate) fn new(boxes: &[([f64; 2], [f64; 2])], grow: f64) -> Self {
-        let finite = |b: &&([f64; 2], [f64; 2])| b.0.iter().chain(&b.1).all(|v| v.is_finite());
-        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
-        let mut sizes: Vec<f64> = Vec::with_capacity(boxes.len());
-        for b in boxes.iter().filter(finite) {
-            for k in 0..2 {
-                lo[k] = lo[k].min(b.0[k] - grow);
-                hi[k] = hi[k].max(b.1[k] + grow);
-            }
-            sizes.push((b.1[0] - b.0[0]).max(b.1[1] - b.0[1]) + 2.0 * grow);
-        }
-        let mut index = Self {
+/// How much wider a grid's cells are than the finer grid's.
+const COARSER: f64 = 8.0;
+
+impl Grid {
+    fn new(lo: [f64; 2], hi: [f64; 2], cell: f64) -> Self {
+        let cols = (((hi[0] - lo[0]) / cell).floor() as usize + 1).max(1);
+        let rows = (((hi[1] - lo[1]) / cell).floor() as usize + 1).max(1);
+        Self {
             origin: lo,
-            cell: 1.0,
-            cols: 1,
-            rows: 1,
-            cells: vec![Vec::new()],
-            wide: Vec::new(),
-        };
-        if sizes.is_empty() {
-            index.wide = (0..boxes.len()).collect();
-            return index;
+            cell,
+            cols,
+            rows,
+            cells: Vec::new(),
         }
-        sizes.sort_by(f64::total_cmp);
-        let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-9);
-        // at most about 4 cells per box on average, and never a cell finer than the
-        // extent allows for a grid of a few million cells
-        let cap = (4 * boxes.len()).clamp(1, 1 << 22) as f64;
-        let cell = sizes[sizes.len() / 2].max(span / cap.sqrt()).max(1e-9);
-        index.cell = cell;
-        index.cols = (((hi[0] - lo[0]) / cell).floor() as usize + 1).max(1);
-        index.rows = (((hi[1] - lo[1]) / cell).floor() as usize + 1).max(1);
-        index.cells = vec![Vec::new(); index.cols * index.rows];
-        for (i, b) in boxes.iter().enumerate() {
-            if !finite(&b) {
-                index.wide.push(i);
-                continue;
-            }
-            let (c0, r0) = index.cell_of([b.0[0] - grow, b.0[1] - grow]);
-            let (c1, r1) = index.cell_of([b.1[0] + grow, b.1[1] + grow]);
-            if c1 < c0 || r1 < r0 || (c1 - c0 + 1) * (r1 - r0 + 1) > MAX_CELLS_PER_BOX {
-                index.wide.push(i);
-                continue;
-            }
-            for r in r0..=r1 {
-                for c in c0..=c1 {
-                    index.cells[r * index.cols + c].push(i);
-                }
-            }
-        }
-        index
     }
 
     /// The cell holding `p`, clamped to the grid.
@@ -89,15 +60,87 @@ impl BoxIndex {
         )
     }
 
+    /// The cells from `lo` to `hi`, if they are at most [`MAX_CELLS_PER_BOX`].
+    fn span(&self, lo: [f64; 2], hi: [f64; 2]) -> Option<((usize, usize), (usize, usize))> {
+        let (c0, r0) = self.cell_of(lo);
+        let (c1, r1) = self.cell_of(hi);
+        (c1 >= c0 && r1 >= r0 && (c1 - c0 + 1) * (r1 - r0 + 1) <= MAX_CELLS_PER_BOX)
+            .then_some(((c0, r0), (c1, r1)))
+    }
+}
+
+impl BoxIndex {
+    /// An index of `boxes`, each grown by `grow` on every side; the finest grid's cell is
+    /// about the median box size, so a box spans a few cells.
+    pub(crate) fn new(boxes: &[([f64; 2], [f64; 2])], grow: f64) -> Self {
+        let finite = |b: &([f64; 2], [f64; 2])| b.0.iter().chain(&b.1).all(|v| v.is_finite());
+        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+        let mut sizes: Vec<f64> = Vec::with_capacity(boxes.len());
+        for b in boxes.iter().filter(|b| finite(b)) {
+            for k in 0..2 {
+                lo[k] = lo[k].min(b.0[k] - grow);
+                hi[k] = hi[k].max(b.1[k] + grow);
+            }
+            sizes.push((b.1[0] - b.0[0]).max(b.1[1] - b.0[1]) + 2.0 * grow);
+        }
+        let mut index = Self {
+            grids: Vec::new(),
+            unplaced: Vec::new(),
+        };
+        if sizes.is_empty() {
+            index.unplaced = (0..boxes.len()).collect();
+            return index;
+        }
+        sizes.sort_by(f64::total_cmp);
+        let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-9);
+        // at most about 4 cells per box on average, and never a cell finer than the
+        // extent allows for a grid of a few million cells
+        let cap = (4 * boxes.len()).clamp(1, 1 << 22) as f64;
+        let cell = sizes[sizes.len() / 2].max(span / cap.sqrt()).max(1e-9);
+        for (i, b) in boxes.iter().enumerate() {
+            if !finite(b) {
+                index.unplaced.push(i);
+                continue;
+            }
+            let (blo, bhi) = (
+                [b.0[0] - grow, b.0[1] - grow],
+                [b.1[0] + grow, b.1[1] + grow],
+            );
+            // the finest grid where it spans few cells (the coarsest grid has one cell, or
+            // two across where a box meets its edge)
+            let mut level = 0;
+            let ((c0, r0), (c1, r1)) = loop {
+                if level == index.grids.len() {
+                    let cell = cell * COARSER.powi(level as i32);
+                    let mut grid = Grid::new(lo, hi, cell);
+                    grid.cells = vec![Vec::new(); grid.cols * grid.rows];
+                    index.grids.push(grid);
+                }
+                let grid = &index.grids[level];
+                match grid.span(blo, bhi) {
+                    Some(cells) => break cells,
+                    None if grid.cols * grid.rows == 1 => break ((0, 0), (0, 0)),
+                    None => level += 1,
+                }
+            };
+            let grid = &mut index.grids[level];
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    grid.cells[r * grid.cols + c].push(i);
+                }
+            }
+        }
+        index
+    }
+
     /// The boxes (indices, ascending) that may hold `p` (grown boxes holding it, and
     /// perhaps a few more: the caller checks).
     pub(crate) fn at(&self, p: [f64; 2]) -> Vec<usize> {
-        let (c, r) = self.cell_of(p);
-        let mut out: Vec<usize> = self.cells[r * self.cols + c]
-            .iter()
-            .chain(&self.wide)
-            .copied()
-            .collect();
+        let mut out: Vec<usize> = self.unplaced.clone();
+        for grid in &self.grids {
+            let (c, r) = grid.cell_of(p);
+            out.extend_from_slice(&grid.cells[r * grid.cols + c]);
+        }
         out.sort_unstable();
         out.dedup();
         out
@@ -149,6 +192,40 @@ mod tests {
             "{:?}",
             index.at([70.0, 50.0])
         );
+    }
+
+    /// Large boxes spread over the drawing (copies of a big contour) sit on coarser grids:
+    /// a point lists the few whose cells it is in, not all of them (the one list of wide
+    /// boxes every lookup went through made a file of thousands of them quadratic).
+    #[test]
+    fn large_boxes_spread_out_are_not_listed_everywhere() {
+        // 10,000 plates of 10 mm 100 mm apart, 200 boxes of 2 m over them (each 40 cells
+        // across on the finest grid)
+        let mut boxes: Vec<([f64; 2], [f64; 2])> = Vec::new();
+        for k in 0..10_000 {
+            let (x, y) = (100.0 * (k % 100) as f64, 100.0 * (k / 100) as f64);
+            boxes.push(([x, y], [x + 10.0, y + 10.0]));
+        }
+        for k in 0..200u64 {
+            let (x, y) = ((k * 7919 % 8000) as f64, (k * 104_729 % 8000) as f64);
+            boxes.push(([x, y], [x + 2000.0, y + 2000.0]));
+        }
+        let index = BoxIndex::new(&boxes, 0.0);
+        let mut longest = 0;
+        for k in 0..400u64 {
+            let p = [
+                (k * 613 % 10_000) as f64 + 0.5,
+                (k * 997 % 10_000) as f64 + 0.5,
+            ];
+            let got = index.at(p);
+            for (i, b) in boxes.iter().enumerate() {
+                if (0..2).all(|j| p[j] >= b.0[j] && p[j] <= b.1[j]) {
+                    assert!(got.contains(&i), "{p:?}: box {i} missing");
+                }
+            }
+            longest = longest.max(got.len());
+        }
+        assert!(longest <= 60, "a point lists up to {longest} boxes");
     }
 
     #[test]

@@ -155,6 +155,9 @@ pub(crate) fn fit_arcs(
     samples_left: &Cell<usize>,
 ) -> Result<Vec<Segment>, String> {
     let p = samples(curve, tolerance, samples_left.get()).ok_or_else(|| {
+        // the file's samples are spent: every later curve is refused at once, not
+        // sampled up to the same limit again (thousands of copies of one huge curve)
+        samples_left.set(0);
         format!(
             "too large for the arc tolerance {tolerance} mm (the file's curves need over {MAX_SAMPLES} samples): drawn in the wrong units, or a corrupt number?"
         )
@@ -425,6 +428,35 @@ mod tests {
                 sv_geom::planar::boundary_distance(p, &flat)
             })
             .fold(0.0, f64::max)
+    }
+
+    /// A curve that runs out of the file's samples spends them: the next one is refused at
+    /// once (thousands of copies of one huge curve were each sampled up to the limit).
+    #[test]
+    fn a_curve_past_the_samples_left_spends_them() {
+        let f = |t: f64| [1e6 * t.cos(), 4e5 * t.sin()];
+        let curve = Curve {
+            at: &f,
+            t0: 0.0,
+            t1: std::f64::consts::TAU,
+            breaks: vec![],
+        };
+        let left = Cell::new(5000);
+        let e = fit_arcs(&curve, 0.01, &left).unwrap_err();
+        assert!(
+            e.starts_with("too large for the arc tolerance 0.01 mm"),
+            "{e}"
+        );
+        assert_eq!(left.get(), 0);
+        // a small curve now has none either
+        let g = |t: f64| [t, 0.0];
+        let small = Curve {
+            at: &g,
+            t0: 0.0,
+            t1: 1.0,
+            breaks: vec![],
+        };
+        assert!(fit_arcs(&small, 0.01, &left).is_err());
     }
 
     #[test]
