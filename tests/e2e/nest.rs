@@ -149,6 +149,12 @@ fn bad_nest_input_is_one_line() {
     let dir = Dir::new();
     dir.write("a.dxf", dxf(&[(0.0, 400.0, 150.0)]));
     dir.write("garbage.dxf", [0u8, 1, 2, 3, 250, 251]);
+    // a header date the DXF parser cannot hold: it panics inside, and the panic's own
+    // message must not reach stderr beside the error
+    dir.write(
+        "date.dxf",
+        "0\nSECTION\n2\nHEADER\n9\n$TDCREATE\n40\n1e300\n0\nENDSEC\n0\nEOF\n",
+    );
     for (args, needle) in [
         (vec!["a.dxf", "--sheet", "3000"], "--sheet"),
         (vec!["a.dxf", "--sheet", "0x100"], "--sheet"),
@@ -161,6 +167,10 @@ fn bad_nest_input_is_one_line() {
         (vec!["a.dxf", "--margin", "-1"], "--margin"),
         (vec!["a.dxf", "--nest-seconds", "0"], "--nest-seconds"),
         (vec!["garbage.dxf"], "nothing to nest"),
+        (
+            vec!["date.dxf"],
+            "a value it cannot hold, such as a date out of range",
+        ),
         (vec!["missing.dxf"], "missing.dxf"),
     ] {
         let mut argv = vec!["nest"];

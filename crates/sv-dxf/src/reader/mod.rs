@@ -224,21 +224,20 @@ const PARSER_MESSAGE_CHARS: usize = 200;
 /// escaped and the middle of a long message is cut out; and it panics on some values it cannot hold (a
 /// header date such as `$TDCREATE` past the year 262143), which is an error like any other.
 fn load(bytes: &[u8]) -> Result<dxf::Drawing, String> {
-    let message =
-        match std::panic::catch_unwind(|| dxf::Drawing::load(&mut std::io::Cursor::new(bytes))) {
-            Ok(Ok(drawing)) => return Ok(drawing),
-            Ok(Err(e)) => e.to_string(),
-            Err(panic) => {
-                let what = panic
-                    .downcast_ref::<&str>()
-                    .map(|s| s.to_string())
-                    .or_else(|| panic.downcast_ref::<String>().cloned())
-                    .unwrap_or_default();
-                format!(
+    let message = match quietly(|| dxf::Drawing::load(&mut std::io::Cursor::new(bytes))) {
+        Ok(Ok(drawing)) => return Ok(drawing),
+        Ok(Err(e)) => e.to_string(),
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            format!(
                 "the parser failed on a value it cannot hold, such as a date out of range ({what})"
             )
-            }
-        };
+        }
+    };
     let chars: Vec<char> = message.chars().collect();
     if chars.len() <= PARSER_MESSAGE_CHARS {
         return Err(printable(&message));
@@ -248,6 +247,30 @@ fn load(bytes: &[u8]) -> Result<dxf::Drawing, String> {
     let head: String = chars[..half].iter().collect();
     let tail: String = chars[chars.len() - half..].iter().collect();
     Err(format!("{}...{}", printable(&head), printable(&tail)))
+}
+
+thread_local! {
+    /// Whether this thread is in [`quietly`]: its panics are caught and reported as errors.
+    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// `f()`, a panic in it caught, and not printed by the panic hook either (the error that
+/// reports it is the one line the user sees). The hook is wrapped once for the process;
+/// other threads' panics go to the hook as before.
+fn quietly<T>(f: impl FnOnce() -> T) -> std::thread::Result<T> {
+    static WRAP: std::sync::Once = std::sync::Once::new();
+    WRAP.call_once(|| {
+        let hook = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.with(|q| q.get()) {
+                hook(info);
+            }
+        }));
+    });
+    QUIET.with(|q| q.set(true));
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    QUIET.with(|q| q.set(false));
+    out
 }
 
 /// `text` from the file (a layer name, a parser message quoting a line) with its control
