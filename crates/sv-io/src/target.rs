@@ -333,32 +333,31 @@ mod tests {
         }
     }
 
+    /// The error reading `text` as `t.obj`.
+    fn error_of(text: &str) -> String {
+        read_target(text.as_bytes(), "t.obj")
+            .unwrap_err()
+            .to_string()
+    }
+
     #[test]
     fn bad_targets_name_the_line() {
         // a third triangle on the edge between vertices 2 and 3 (file numbers)
         let text =
             "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1 0 1\nf 1 2 3\nf 1 3 4\nf 3 2 5\nf 2 3 5\n";
-        let e = read_target(text.as_bytes(), "t.obj")
-            .unwrap_err()
-            .to_string();
+        let e = error_of(text);
         assert!(e.starts_with("t.obj: the edge from vertex 2 to vertex 3 has 3 triangles (the triangle on line 6, the triangle on line 8, the triangle on line 9)"), "{e}");
         let text = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 4\nf 1 2 3\n";
-        let e = read_target(text.as_bytes(), "t.obj")
-            .unwrap_err()
-            .to_string();
+        let e = error_of(text);
         assert_eq!(
             e,
             "t.obj: the triangle on line 6 has zero area (its corners are collinear)"
         );
         let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 0 0\nv 6 0 0\nv 5 1 0\nf 1 2 3\nf 4 5 6\n";
-        let e = read_target(text.as_bytes(), "t.obj")
-            .unwrap_err()
-            .to_string();
+        let e = error_of(text);
         assert_eq!(e, "t.obj: the triangle on line 8 is not connected to the triangle on line 7 (the target must be one piece)");
         let tetra = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
-        let e = read_target(tetra.as_bytes(), "t.obj")
-            .unwrap_err()
-            .to_string();
+        let e = error_of(tetra);
         assert!(e.contains("closed"), "{e}");
     }
 
@@ -367,9 +366,7 @@ mod tests {
     #[test]
     fn a_vertex_far_out_is_refused_not_read_as_nan() {
         let text = "v 0 0 0\nv 1 0 0\nv 1e308 -1e308 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
-        let e = read_target(text.as_bytes(), "t.obj")
-            .unwrap_err()
-            .to_string();
+        let e = error_of(text);
         assert_eq!(e, "t.obj: vertex 3 at (1e308, -1e308, 0) is farther than 1e12 mm from the origin (a corrupt number, or not in mm?)");
         // site coordinates (a UTM northing in mm) are read
         let text = "v 0 5e9 0\nv 1 5e9 0\nv 1 5000000001 0\nf 1 2 3\n";

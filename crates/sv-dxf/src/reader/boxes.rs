@@ -40,7 +40,7 @@ impl Grid {
             cell,
             cols,
             rows,
-            cells: Vec::new(),
+            cells: vec![Vec::new(); cols * rows],
         }
     }
 
@@ -111,10 +111,8 @@ impl BoxIndex {
             let mut level = 0;
             let ((c0, r0), (c1, r1)) = loop {
                 if level == index.grids.len() {
-                    let cell = cell * COARSER.powi(level as i32);
-                    let mut grid = Grid::new(lo, hi, cell);
-                    grid.cells = vec![Vec::new(); grid.cols * grid.rows];
-                    index.grids.push(grid);
+                    let coarser = cell * COARSER.powi(level as i32);
+                    index.grids.push(Grid::new(lo, hi, coarser));
                 }
                 let grid = &index.grids[level];
                 match grid.span(blo, bhi) {

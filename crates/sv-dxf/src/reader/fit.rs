@@ -430,19 +430,23 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
+    /// `f` over one turn, `[0, 2 pi]`.
+    fn turn(f: &dyn Fn(f64) -> [f64; 2]) -> Curve<'_> {
+        Curve {
+            at: f,
+            t0: 0.0,
+            t1: std::f64::consts::TAU,
+            breaks: vec![],
+        }
+    }
+
     /// A curve that runs out of the file's samples spends them: the next one is refused at
     /// once (thousands of copies of one huge curve were each sampled up to the limit).
     #[test]
     fn a_curve_past_the_samples_left_spends_them() {
         let f = |t: f64| [1e6 * t.cos(), 4e5 * t.sin()];
-        let curve = Curve {
-            at: &f,
-            t0: 0.0,
-            t1: std::f64::consts::TAU,
-            breaks: vec![],
-        };
         let left = Cell::new(5000);
-        let e = fit_arcs(&curve, 0.01, &left).unwrap_err();
+        let e = fit_arcs(&turn(&f), 0.01, &left).unwrap_err();
         assert!(
             e.starts_with("too large for the arc tolerance 0.01 mm"),
             "{e}"
@@ -462,13 +466,7 @@ mod tests {
     #[test]
     fn an_ellipse_becomes_few_arcs_within_the_tolerance() {
         let f = |t: f64| [100.0 * t.cos(), 40.0 * t.sin()];
-        let curve = Curve {
-            at: &f,
-            t0: 0.0,
-            t1: std::f64::consts::TAU,
-            breaks: vec![],
-        };
-        let segs = fit_arcs(&curve, 0.01, &Cell::new(MAX_SAMPLES)).unwrap();
+        let segs = fit_arcs(&turn(&f), 0.01, &Cell::new(MAX_SAMPLES)).unwrap();
         assert!(
             segs.len() < 60 && segs.iter().all(|s| s.bulge != 0.0),
             "{}",
