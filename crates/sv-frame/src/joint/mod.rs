@@ -206,98 +206,112 @@ fn unit_error(f: usize, e: UnitFailure) -> FrameError {
     }
 }
 
-/// Levenberg-Marquardt on `problem` from `x` (plates at `poses`) for at most `budget`
-/// iterations, on the normal equations `ne` (the same problem's every time, so that its
-/// pattern and the analysis of it are kept from one call to the next): steps within a
-/// trust region of MAX_STEP of the side, the anchors taken again after every step; where
-/// it stalls, the joints outside their limits weigh more and it goes on. Adds the
-/// iterations used to `done` (progress is reported from there) and returns the units at
-/// the end.
-#[allow(clippy::too_many_arguments)]
-fn descend(
-    problem: &mut Problem<'_>,
-    ne: &mut NormalEquations,
-    x: &mut Vec<Real>,
-    poses: &mut Vec<PlatePose>,
-    budget: usize,
-    anchors_at: &(dyn Fn(&[Real]) -> Vec<Anchor> + Sync),
-    done: &mut usize,
-    progress: &mut dyn FnMut(usize, Real),
-) -> Result<Vec<UnitPoints>, FrameError> {
-    let nf = problem.faces.len();
-    let moves = 3 * problem.nv + UNIT_COLUMNS * nf;
-    let scale = problem.model.scale;
-    let mut units = problem
-        .units(x, poses, true)
-        .map_err(|(f, e)| unit_error(f, e))?;
-    let mut energy = problem.energy(x, &units);
-    let mut dx = vec![0.0; x.len()];
-    let mut lambda = 1e-4;
-    let mut iterations = 0;
-    while iterations < budget {
-        iterations += 1;
-        ne.reset(1e-9);
-        problem.visit(x, &units, ne);
-        let mut accepted = None;
-        for _ in 0..40 {
-            if !ne
-                .solve_damped(lambda, &mut dx)
-                .map_err(|e| FrameError::Linear(e.0))?
-            {
-                lambda *= 10.0;
-                continue;
+/// The joint solve between its rounds: where it is (the vertices and unit numbers `x`, the
+/// plates at `poses`), the normal equations (the same problem's every time, so that their
+/// pattern and its analysis are kept from one round to the next), how the anchors are
+/// taken, and the iterations used so far (progress is reported from there).
+struct Descent<'s> {
+    ne: NormalEquations,
+    x: Vec<Real>,
+    poses: Vec<PlatePose>,
+    anchors_at: &'s (dyn Fn(&[Real]) -> Vec<Anchor> + Sync),
+    iterations: usize,
+    progress: &'s mut dyn FnMut(usize, Real),
+}
+
+impl Descent<'_> {
+    /// Levenberg-Marquardt on `problem` for at most `budget` iterations: steps within a
+    /// trust region of MAX_STEP of the side, the anchors taken again after every step;
+    /// where it stalls, the joints outside their limits weigh more and it goes on. Returns
+    /// the units at the end.
+    fn run(
+        &mut self,
+        problem: &mut Problem<'_>,
+        budget: usize,
+    ) -> Result<Vec<UnitPoints>, FrameError> {
+        let Self {
+            ne,
+            x,
+            poses,
+            anchors_at,
+            iterations: done,
+            progress,
+        } = self;
+        let nf = problem.faces.len();
+        let moves = 3 * problem.nv + UNIT_COLUMNS * nf;
+        let scale = problem.model.scale;
+        let mut units = problem
+            .units(x, poses, true)
+            .map_err(|(f, e)| unit_error(f, e))?;
+        let mut energy = problem.energy(x, &units);
+        let mut dx = vec![0.0; x.len()];
+        let mut lambda = 1e-4;
+        let mut iterations = 0;
+        while iterations < budget {
+            iterations += 1;
+            ne.reset(1e-9);
+            problem.visit(x, &units, ne);
+            let mut accepted = None;
+            for _ in 0..40 {
+                if !ne
+                    .solve_damped(lambda, &mut dx)
+                    .map_err(|e| FrameError::Linear(e.0))?
+                {
+                    lambda *= 10.0;
+                    continue;
+                }
+                // a trust region in the problem's own sizes: vertices and plates (turns as
+                // arcs at the unit's size) move at most MAX_STEP of the side per step (the joint
+                // points slide freely along their sides: not counted, only clamped)
+                let largest = dx[..moves].iter().fold(0.0, |m: Real, v| m.max(v.abs()));
+                let k = (MAX_STEP * scale / largest.max(1e-300)).min(1.0);
+                let mut trial: Vec<Real> = x.iter().zip(&dx).map(|(a, b)| a + k * b).collect();
+                for &col in &problem.joint_columns {
+                    trial[col] = trial[col].clamp(0.0, scale);
+                }
+                if let Ok(u) = problem.units(&trial, poses, false) {
+                    let e = problem.energy(&trial, &u);
+                    if e < energy {
+                        accepted = Some((trial, e));
+                        break;
+                    }
+                }
+                lambda *= 4.0;
             }
-            // a trust region in the problem's own sizes: vertices and plates (turns as
-            // arcs at the unit's size) move at most MAX_STEP of the side per step (the joint
-            // points slide freely along their sides: not counted, only clamped)
-            let largest = dx[..moves].iter().fold(0.0, |m: Real, v| m.max(v.abs()));
-            let k = (MAX_STEP * scale / largest.max(1e-300)).min(1.0);
-            let mut trial: Vec<Real> = x.iter().zip(&dx).map(|(a, b)| a + k * b).collect();
-            for &col in &problem.joint_columns {
-                trial[col] = trial[col].clamp(0.0, scale);
-            }
-            if let Ok(u) = problem.units(&trial, poses, false) {
-                let e = problem.energy(&trial, &u);
-                if e < energy {
-                    accepted = Some((trial, e));
+            let gain = match accepted {
+                Some((next, e)) => {
+                    let gain = (energy - e) / energy.max(1e-300);
+                    // the plates take their increments; the increments start from zero again
+                    *poses = (0..nf).map(|f| problem.pose(&next, f, poses)).collect();
+                    *x = next;
+                    for f in 0..nf {
+                        let c = problem.pose_column(f);
+                        x[c..c + 6].iter_mut().for_each(|v| *v = 0.0);
+                    }
+                    // the vertices moved: their anchors follow
+                    problem.anchors = anchors_at(x);
+                    lambda = (lambda / 3.0).max(1e-9);
+                    units = problem
+                        .units(x, poses, true)
+                        .map_err(|(f, e)| unit_error(f, e))?;
+                    energy = problem.energy(x, &units);
+                    progress(*done + iterations, energy);
+                    gain
+                }
+                None => 0.0,
+            };
+            if gain < STALL {
+                // stalled: the joints still outside their limits weigh more, and on
+                if !problem.emphasise(x, &units) {
                     break;
                 }
-            }
-            lambda *= 4.0;
-        }
-        let gain = match accepted {
-            Some((next, e)) => {
-                let gain = (energy - e) / energy.max(1e-300);
-                // the plates take their increments; the increments start from zero again
-                *poses = (0..nf).map(|f| problem.pose(&next, f, poses)).collect();
-                *x = next;
-                for f in 0..nf {
-                    let c = problem.pose_column(f);
-                    x[c..c + 6].iter_mut().for_each(|v| *v = 0.0);
-                }
-                // the vertices moved: their anchors follow
-                problem.anchors = anchors_at(x);
-                lambda = (lambda / 3.0).max(1e-9);
-                units = problem
-                    .units(x, poses, true)
-                    .map_err(|(f, e)| unit_error(f, e))?;
                 energy = problem.energy(x, &units);
-                progress(*done + iterations, energy);
-                gain
+                lambda = 1e-4;
             }
-            None => 0.0,
-        };
-        if gain < STALL {
-            // stalled: the joints still outside their limits weigh more, and on
-            if !problem.emphasise(x, &units) {
-                break;
-            }
-            energy = problem.energy(x, &units);
-            lambda = 1e-4;
         }
+        *done += iterations;
+        Ok(units)
     }
-    *done += iterations;
-    Ok(units)
 }
 
 /// The chart coordinates of a pose: the rotation's angle `theta` and its axis' tilt `phi`
@@ -411,7 +425,7 @@ pub fn close_joints(
         nv,
         near: options.closeness * scale,
     };
-    let mut poses = plate_poses(solved);
+    let poses = plate_poses(solved);
     let n = 3 * nv + UNIT_COLUMNS * nf + links;
     let mut x = vec![0.0; n];
     for (v, p) in mesh.vertices.iter().enumerate() {
@@ -486,8 +500,14 @@ pub fn close_joints(
     let start = problem.figures(&x, &units);
     // one set of normal equations for every round: the rows keep their columns whatever
     // their weights, so the pattern and its analysis are the same throughout
-    let mut ne = NormalEquations::new(n);
-    let mut iterations = 0;
+    let mut descent = Descent {
+        ne: NormalEquations::new(n),
+        x,
+        poses,
+        anchors_at: &anchors_at,
+        iterations: 0,
+        progress,
+    };
     let mut demoted = Vec::new();
     // the iterations of the stages; the rest are the legs' polish
     let polish = (LEG_POLISH.len() * POLISH_ITERATIONS).min(options.max_iterations / 4);
@@ -499,18 +519,9 @@ pub fn close_joints(
             closing * 2 / 5
         } else {
             problem.stiffness = stiffness;
-            closing.saturating_sub(iterations) / (STIFFNESS.len() - stage)
+            closing.saturating_sub(descent.iterations) / (STIFFNESS.len() - stage)
         };
-        units = descend(
-            &mut problem,
-            &mut ne,
-            &mut x,
-            &mut poses,
-            budget,
-            &anchors_at,
-            &mut iterations,
-            progress,
-        )?;
+        units = descent.run(&mut problem, budget)?;
     }
     let mut rounds = 0;
     // the worst weld's excess when the last round for the welds began
@@ -521,21 +532,12 @@ pub fn close_joints(
         // cost a millimetre of plate move in the projection onto them
         for legs in LEG_POLISH {
             problem.legs = legs;
-            units = descend(
-                &mut problem,
-                &mut ne,
-                &mut x,
-                &mut poses,
-                polish / LEG_POLISH.len(),
-                &anchors_at,
-                &mut iterations,
-                progress,
-            )?;
+            units = descent.run(&mut problem, polish / LEG_POLISH.len())?;
         }
         // the bridges the solve could not make (its iterations used up): the strips are
         // split there, and the welds that take their place get a round of their own, polished
         // again (a few rounds, as a round may leave a bridge beside them outside its limits).
-        let records = problem.records(&x, &units);
+        let records = problem.records(&descent.x, &units);
         let failing = problem.failing_bridges(&records);
         if options.split_iterations == 0 || rounds == ROUNDS {
             break;
@@ -559,17 +561,14 @@ pub fn close_joints(
             demoted.push((li, j));
         }
         problem.legs = 1.0;
-        units = descend(
-            &mut problem,
-            &mut ne,
-            &mut x,
-            &mut poses,
-            options.split_iterations,
-            &anchors_at,
-            &mut iterations,
-            progress,
-        )?;
+        units = descent.run(&mut problem, options.split_iterations)?;
     }
+    let Descent {
+        x,
+        poses,
+        iterations,
+        ..
+    } = descent;
     let end = problem.figures(&x, &units);
     // the new frame: hubs from the new mesh, each unit's pose on its hub projected onto its
     // legs as cut exactly
