@@ -1105,10 +1105,11 @@ fn open_joints_row(frame: &sv_frame::FrameFile, tried_both: bool) -> Vec<String>
 }
 
 /// What may close the joints a build left open: more iterations, the other strip direction
-/// where only one was tried, a larger unit size, and, where every hub lap was held to one
-/// length (`held_laps`), laps left free or a wider band (measured at 300 mm: the built-in
-/// pavilion, dome and vault close every joint with free laps and leave 1 / 1 / 5 welds open
-/// with the laps held within 1 mm; docs/config.md).
+/// where only one was tried and, where every hub lap was held to one length (`held_laps`),
+/// laps left free or a wider band (at 300 mm the built-in pavilion, dome and vault close
+/// every joint with free laps and leave 1 / 1 / 5 welds open with the laps held within
+/// 1 mm). A larger unit size or another spin angle is not named: measured, they opened more
+/// welds (docs/geometry.md 6.9).
 fn open_joint_levers(tried_both: bool, held_laps: bool) -> String {
     let mut levers = vec!["more [joints] max_iterations"];
     if !tried_both {
@@ -1117,9 +1118,12 @@ fn open_joint_levers(tried_both: bool, held_laps: bool) -> String {
     if held_laps {
         levers.push("[frame] overlap = \"free\" or a wider overlap_tolerance");
     }
-    levers.push("a larger unit size");
     let last = levers.pop().unwrap_or_default();
-    let mut text = format!("{} or {last} may close them", levers.join(", "));
+    let mut text = if levers.is_empty() {
+        format!("{last} may close them")
+    } else {
+        format!("{} or {last} may close them", levers.join(", "))
+    };
     if held_laps {
         text.push_str(" (the hub laps held to one length cost closure)");
     }
@@ -1306,5 +1310,16 @@ mod tests {
         assert!(held.contains("[frame] overlap = \"free\""), "{held}");
         assert!(held.contains("cost closure"), "{held}");
         assert!(held.ends_with("may close them (the hub laps held to one length cost closure)"));
+        // measured to open more welds, not fewer: not offered
+        for text in [&both, &held] {
+            assert!(
+                !text.contains("unit size") && !text.contains("spin"),
+                "{text}"
+            );
+        }
+        assert_eq!(
+            open_joint_levers(false, false),
+            "more [joints] max_iterations or the other --strip-direction may close them"
+        );
     }
 }
