@@ -281,6 +281,33 @@ fn layout_flag_and_config_key_read_the_designers_layout() {
 }
 
 #[test]
+fn a_layout_vertex_far_out_is_named() {
+    // a finite but absurd coordinate used to reach the build and fail there as "initial
+    // face 0 is flipped"; the layout reader refuses it as the target reader does
+    let dir = Dir::new();
+    let (text, _) = layout_obj();
+    let far = text.replacen(text.lines().next().unwrap(), "v 1e308 0 0", 1);
+    dir.write("far.obj", far);
+    let out = dir.run(&[
+        "build",
+        "--target",
+        "builtin:dome",
+        "--layout",
+        "far.obj",
+        "--out",
+        "t",
+    ]);
+    out.expect_code(2);
+    assert!(
+        out.one_error_line().contains(
+            "far.obj: vertex 1 at (1e308, 0, 0) is farther than 1e12 mm from the origin (a corrupt number, or not in mm?)"
+        ),
+        "{out:?}"
+    );
+    assert!(!dir.join("t").exists());
+}
+
+#[test]
 fn a_target_in_metres_is_named_with_its_bounding_box() {
     let dir = Dir::new();
     // 6 x 4 m drawn in metres

@@ -1,7 +1,8 @@
 //! Geometry core of Spin-Valence: the nalgebra aliases every other crate uses, named
 //! tolerances, a few small 3D queries (closest points of two segments, planarity), exact 2D
 //! predicates for flat patterns and sheets ([`planar`]) and the one arc contour of the
-//! workspace ([`Contour`]: flatten, area, length, containment, maps, offsets).
+//! workspace ([`Contour`]: flatten, area, length, containment, maps, offsets); and the
+//! escaping of outside text quoted in one-line messages ([`text`]).
 //!
 //! Conventions: lengths in millimetres, right-handed, Z up, angles in radians.
 //!
@@ -20,6 +21,7 @@ pub mod planar;
 mod rigid;
 mod segment;
 pub mod sparse;
+pub mod text;
 
 pub use contour::{Contour, Segment, Vertex, BULGE_EPS};
 pub use rigid::rigid_fit;

@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use sv_frame::{MeshChecks, QuadMesh};
 
 use crate::obj::parse_obj;
+use crate::reach::within_reach;
 use crate::text::{decode, real};
 use crate::IoError;
 
@@ -66,6 +67,22 @@ pub fn read_quad_obj(text: &str, name: &str) -> Result<QuadMesh, IoError> {
 /// As [`read_quad_obj`].
 pub fn read_quad_obj_bytes(bytes: &[u8], name: &str) -> Result<QuadMesh, IoError> {
     read_quad_obj(&decode(bytes), name)
+}
+
+/// The designer's coarse layout (`--layout`, fitted to the target; planarity not required):
+/// [`read_quad_obj_bytes`], then every vertex within the reach the target reader allows
+/// (1e12 mm of the origin), so that a corrupt number is named here rather than failing the
+/// fit later.
+///
+/// # Errors
+/// As [`read_quad_obj`], or `layout.obj: vertex 1 at (1e308, 0, 0) is farther than 1e12 mm
+/// from the origin (a corrupt number, or not in mm?)` (1-based vertex numbers).
+pub fn read_layout_obj_bytes(bytes: &[u8], name: &str) -> Result<QuadMesh, IoError> {
+    let mesh = read_quad_obj_bytes(bytes, name)?;
+    for (i, p) in mesh.vertices.iter().enumerate() {
+        within_reach(name, p, || format!("vertex {}", i + 1))?;
+    }
+    Ok(mesh)
 }
 
 /// [`read_quad_obj`] followed by [`QuadMesh::validate`] (finite, non-degenerate, manifold,
@@ -222,6 +239,18 @@ mod tests {
             "v 0 0 0\x00\x01\x02",
             "hubs.obj: not an OBJ file (line 1: 'v 0 0 0\\0\\u{1}\\u{2}')",
         );
+    }
+
+    #[test]
+    fn a_layout_vertex_far_out_is_named() {
+        let mut text = write_quad_obj(&grid(), "");
+        text = text.replacen("v 0 0 0\n", "v 0 0 0\nv 1e308 0 0\n", 1);
+        let e = read_layout_obj_bytes(text.as_bytes(), "layout.obj").unwrap_err();
+        assert_eq!(e.to_string(), "layout.obj: vertex 2 at (1e308, 0, 0) is farther than 1e12 mm from the origin (a corrupt number, or not in mm?)");
+        // the hub mesh reader, and the layout reader within reach, read it as before
+        assert!(read_quad_obj(&text, "hubs.obj").is_ok());
+        let near = text.replace("1e308", "1e12");
+        assert!(read_layout_obj_bytes(near.as_bytes(), "layout.obj").is_ok());
     }
 
     #[test]

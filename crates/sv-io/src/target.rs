@@ -15,16 +15,11 @@ use std::collections::HashMap;
 use sv_geom::Point3;
 
 use crate::obj::parse_obj;
+use crate::reach::within_reach;
 use crate::stl::{binary_stl_size, read_ascii_stl, read_binary_stl};
-use crate::text::{decode, is_binary_char, real};
+use crate::text::{decode, is_binary_char};
 use crate::tri_mesh::{read_tri_mesh, weld_indexed, WELD_RELATIVE_TOLERANCE};
 use crate::{IoError, TriMesh};
-
-/// Farthest a target's coordinate may be from the origin (mm): a million km, room for
-/// site coordinates (a UTM northing is 5e9 mm) at a float resolution of 0.1 um. Beyond it
-/// the size and areas of the surface overflow (a vertex at 1e308 made the zero-area check
-/// pass on NaN).
-const MAX_COORDINATE: f64 = 1e12;
 
 /// What reading a target repaired.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -78,21 +73,8 @@ pub fn read_target(bytes: &[u8], name: &str) -> Result<TargetFile, IoError> {
     };
     // the surface's size, the weld tolerance and areas are finite numbers: no vertex far out
     for (t, tri) in corners.iter().enumerate() {
-        if let Some(k) = tri
-            .iter()
-            .position(|p| p.iter().any(|x| x.abs() > MAX_COORDINATE))
-        {
-            let p = tri[k];
-            return Err(IoError::whole(
-                name,
-                format!(
-                    "{} at ({}, {}, {}) is farther than {MAX_COORDINATE:e} mm from the origin (a corrupt number, or not in mm?)",
-                    corner_name(t, k),
-                    real(p.x),
-                    real(p.y),
-                    real(p.z)
-                ),
-            ));
+        for (k, p) in tri.iter().enumerate() {
+            within_reach(name, p, || corner_name(t, k))?;
         }
     }
     let (mut mesh, first, dropped) = weld_indexed(&corners, WELD_RELATIVE_TOLERANCE);

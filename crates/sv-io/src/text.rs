@@ -2,6 +2,8 @@
 
 use std::borrow::Cow;
 
+use sv_geom::text::printable;
+
 /// Longest excerpt of an offending line quoted in a message (in characters).
 const SNIPPET_CHARS: usize = 40;
 
@@ -9,19 +11,13 @@ const SNIPPET_CHARS: usize = 40;
 /// escaped, cut to [`SNIPPET_CHARS`] characters with `...` when longer.
 pub(crate) fn snippet(line: &str) -> String {
     let trimmed = line.trim();
-    let mut out = String::new();
-    for (n, c) in trimmed.chars().enumerate() {
-        if n == SNIPPET_CHARS {
-            out.push_str("...");
-            break;
-        }
-        if c.is_control() {
-            out.extend(c.escape_debug());
-        } else {
-            out.push(c);
-        }
-    }
-    out
+    let head: String = trimmed.chars().take(SNIPPET_CHARS).collect();
+    let more = if head.len() < trimmed.len() {
+        "..."
+    } else {
+        ""
+    };
+    format!("{}{more}", printable(&head))
 }
 
 /// An `f64` written so that parsing it back gives the same value bit for bit (finite

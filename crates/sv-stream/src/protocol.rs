@@ -7,6 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
+use sv_geom::text::excerpt;
 
 /// The protocol version announced in `welcome`.
 pub const PROTOCOL_VERSION: u32 = 1;
@@ -537,6 +538,11 @@ pub fn to_text<T: Serialize>(message: &T) -> String {
     })
 }
 
+/// Longest field error quoted in a `bad_message` (characters, before escaping): serde's
+/// message quotes the client's text (an unknown key or variant) as it came, line breaks and
+/// all, so its control characters are escaped and a long one loses its middle.
+const FIELD_ERROR_CHARS: usize = 160;
+
 /// Parse a client message, telling unknown types from bad fields.
 pub fn parse_client(text: &str) -> Result<ClientMessage, (ErrorCode, String)> {
     if text.len() > MAX_MESSAGE_BYTES {
@@ -556,7 +562,10 @@ pub fn parse_client(text: &str) -> Result<ClientMessage, (ErrorCode, String)> {
         let shown: String = kind.chars().take(40).collect();
         return Err((ErrorCode::UnknownType, format!("unknown type {shown:?}")));
     }
-    serde_json::from_value(value).map_err(|e| (ErrorCode::BadMessage, format!("{kind}: {e}")))
+    serde_json::from_value(value).map_err(|e| {
+        let why = excerpt(&e.to_string(), FIELD_ERROR_CHARS);
+        (ErrorCode::BadMessage, format!("{kind}: {why}"))
+    })
 }
 
 #[cfg(test)]

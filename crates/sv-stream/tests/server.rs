@@ -207,6 +207,34 @@ async fn bad_messages_keep_the_connection() {
     server.shutdown().await;
 }
 
+#[tokio::test]
+async fn hostile_names_get_a_short_one_line_error() {
+    let server = Server::start(config()).await.unwrap();
+    let mut c = connect(&server).await;
+    c.expect("welcome").await;
+    c.send(json!({"type": "hello", "token": TOKEN})).await;
+    c.expect("ready").await;
+    let long = "k".repeat(5000);
+    for hostile in [
+        json!({"type": "claim", "unit": "A", "evil\n\r\u{1b}[2Jkey": 1}),
+        json!({"type": "claim", "unit": "A", long.as_str(): 1}),
+        json!({"type": "track", "unit": "A", "part": format!("{long}\n"), "pose": pose_json(&target(0))}),
+    ] {
+        c.send(hostile).await;
+        let e = c.expect("error").await;
+        assert_eq!(e["code"], "bad_message");
+        let message = e["message"].as_str().unwrap();
+        assert!(!message.chars().any(char::is_control), "{message:?}");
+        assert!(
+            message.chars().count() <= 200,
+            "{} chars",
+            message.chars().count()
+        );
+        assert!(message.contains("unknown"), "{message}");
+    }
+    server.shutdown().await;
+}
+
 use futures_util::{SinkExt, StreamExt};
 use tokio_tungstenite::tungstenite::Message;
 

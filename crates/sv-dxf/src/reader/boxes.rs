@@ -5,7 +5,13 @@
 //! A box goes on the finest grid where it spans at most [`MAX_CELLS_PER_BOX`] cells; each
 //! grid's cells are [`COARSER`] times wider than the one before. So a drawing border, or
 //! thousands of overlapping copies of a large contour, sit on a coarse grid with few
-//! cells, and a point is looked up in one cell per grid.
+//! cells, and a point is looked up in one cell per grid. [`BoxIndex::first_at`] tries them
+//! in order and stops at the first that holds the point (the smallest contour around it,
+//! when the boxes are in order of area), so thousands of nested copies of a contour are
+//! not all tried for every point. [`SameBoxes`] finds the boxes nearly equal to a box,
+//! for the repeats of a contour.
+
+use std::collections::HashMap;
 
 /// Boxes `(lo, hi)` on uniform grids; [`BoxIndex::at`] lists those that may hold a point.
 pub(crate) struct BoxIndex {
@@ -134,10 +140,94 @@ impl BoxIndex {
     /// The boxes (indices, ascending) that may hold `p` (grown boxes holding it, and
     /// perhaps a few more: the caller checks).
     pub(crate) fn at(&self, p: [f64; 2]) -> Vec<usize> {
-        let mut out: Vec<usize> = self.unplaced.clone();
+        let mut out: Vec<usize> = self.lists(p).concat();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// The first box from index `from` on, in ascending order, that may hold `p` and for
+    /// which `hit` is true: the boxes after it are not tried. A box is on one grid, and a
+    /// point in one cell of each, so each box comes once.
+    pub(crate) fn first_at(
+        &self,
+        p: [f64; 2],
+        from: usize,
+        mut hit: impl FnMut(usize) -> bool,
+    ) -> Option<usize> {
+        // one ascending list per grid, merged
+        let mut lists: Vec<&[usize]> = self
+            .lists(p)
+            .into_iter()
+            .map(|l| &l[l.partition_point(|&i| i < from)..])
+            .collect();
+        loop {
+            let (k, &i) = lists
+                .iter()
+                .enumerate()
+                .filter_map(|(k, l)| l.first().map(|i| (k, i)))
+                .min_by_key(|&(_, i)| *i)?;
+            if hit(i) {
+                return Some(i);
+            }
+            lists[k] = &lists[k][1..];
+        }
+    }
+
+    /// The lists of boxes that may hold `p`, each ascending: the unplaced ones and one
+    /// cell of every grid.
+    fn lists(&self, p: [f64; 2]) -> Vec<&[usize]> {
+        let mut lists = vec![self.unplaced.as_slice()];
         for grid in &self.grids {
             let (c, r) = grid.cell_of(p);
-            out.extend_from_slice(&grid.cells[r * grid.cols + c]);
+            lists.push(&grid.cells[r * grid.cols + c]);
+        }
+        lists
+    }
+}
+
+/// Boxes by their four sides rounded to a step: [`SameBoxes::near`] lists those whose
+/// sides may each be within half a step of a box's (repeats of a contour), without the
+/// boxes that only share a corner with it (copies of a contour scaled about its corner).
+pub(crate) struct SameBoxes {
+    step: f64,
+    cells: HashMap<[i64; 4], Vec<usize>>,
+}
+
+impl SameBoxes {
+    /// `boxes` keyed by their sides in units of `2 tol`, so that sides within `tol` of
+    /// each other are in the same or the next unit (float rounding included).
+    pub(crate) fn new(boxes: &[([f64; 2], [f64; 2])], tol: f64) -> Self {
+        let mut index = Self {
+            step: 2.0 * tol,
+            cells: HashMap::new(),
+        };
+        for (i, b) in boxes.iter().enumerate() {
+            index.cells.entry(index.key(b)).or_default().push(i);
+        }
+        index
+    }
+
+    fn key(&self, b: &([f64; 2], [f64; 2])) -> [i64; 4] {
+        // `as` saturates (and takes NaN to 0): far-out boxes share a key, never go amiss
+        [b.0[0], b.0[1], b.1[0], b.1[1]].map(|v| (v / self.step).floor() as i64)
+    }
+
+    /// The boxes (indices, ascending) whose sides may each be within `tol` of `b`'s, and
+    /// perhaps a few more: the caller checks.
+    pub(crate) fn near(&self, b: &([f64; 2], [f64; 2])) -> Vec<usize> {
+        let key = self.key(b);
+        let mut out = Vec::new();
+        for around in 0..81 {
+            let mut k = key;
+            let mut code = around;
+            for side in &mut k {
+                *side = side.saturating_add(code % 3 - 1);
+                code /= 3;
+            }
+            if let Some(list) = self.cells.get(&k) {
+                out.extend_from_slice(list);
+            }
         }
         out.sort_unstable();
         out.dedup();
@@ -226,11 +316,58 @@ mod tests {
         assert!(longest <= 60, "a point lists up to {longest} boxes");
     }
 
+    /// `first_at` tries the boxes holding a point in ascending order from `from` and stops
+    /// at the first hit; `near` lists every box whose sides are all within `tol`, and not
+    /// a box that only shares its corner (a copy scaled about it).
+    #[test]
+    fn first_hits_and_near_boxes_are_found() {
+        let tol = 0.05;
+        let mut boxes: Vec<([f64; 2], [f64; 2])> = (1..=200)
+            .map(|k| ([0.0, 0.0], [k as f64, k as f64]))
+            .collect();
+        // copies of box 9 (sides 10) moved by up to `tol`, a side exactly `tol` off too
+        for (k, d) in [0.0, 0.01, -0.03, 0.049_999, tol, -tol].iter().enumerate() {
+            let e = if k % 2 == 0 { *d } else { -*d };
+            boxes.push(([*d, e], [10.0 + e, 10.0 + *d]));
+        }
+        let index = BoxIndex::new(&boxes, 0.0);
+        let mut tried = Vec::new();
+        let hit = index.first_at([5.0, 5.0], 20, |i| {
+            tried.push(i);
+            i >= 30
+        });
+        assert_eq!(hit, Some(30));
+        assert_eq!(tried, (20..=30).collect::<Vec<_>>());
+        // boxes whose cells hold the point are tried: the caller says which hold it
+        let holds =
+            |i: usize, p: [f64; 2]| (0..2).all(|k| p[k] >= boxes[i].0[k] && p[k] <= boxes[i].1[k]);
+        assert_eq!(
+            index.first_at([150.0, 5.0], 0, |i| holds(i, [150.0, 5.0])),
+            Some(149)
+        );
+        assert_eq!(index.first_at([150.0, 5.0], 0, |_| false), None);
+        let same = SameBoxes::new(&boxes, tol);
+        let near = same.near(&boxes[9]);
+        for (i, b) in boxes.iter().enumerate() {
+            let within = (0..2).all(|k| {
+                (b.0[k] - boxes[9].0[k]).abs() <= tol && (b.1[k] - boxes[9].1[k]).abs() <= tol
+            });
+            if within {
+                assert!(near.contains(&i), "box {i} {b:?}");
+            }
+        }
+        // of the boxes sharing its corner, only itself
+        assert_eq!(near.iter().filter(|&&i| i < 200).collect::<Vec<_>>(), [&9]);
+    }
+
     #[test]
     fn no_boxes_and_non_finite_boxes_do_not_panic() {
         assert!(BoxIndex::new(&[], 0.1).at([1.0, 2.0]).is_empty());
         let index = BoxIndex::new(&[([f64::NAN, 0.0], [1.0, 1.0]), ([0.0; 2], [1.0; 2])], 0.0);
         assert_eq!(index.at([0.5, 0.5]), vec![0, 1]);
         assert_eq!(index.at([f64::NAN, 0.5]), vec![0, 1]);
+        assert_eq!(index.first_at([f64::NAN, 0.5], 1, |_| true), Some(1));
+        let same = SameBoxes::new(&[([f64::NAN, 0.0], [1.0, 1.0]), ([0.0; 2], [1.0; 2])], 0.1);
+        assert!(same.near(&([0.0; 2], [1.0; 2])).contains(&1));
     }
 }

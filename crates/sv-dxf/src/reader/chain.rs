@@ -180,38 +180,71 @@ fn overlap(a: &Segment, b: &Segment, tol: f64) -> bool {
     })
 }
 
-/// Merges groups of overlapping pieces into the pieces of their union, split where the
-/// members ended (so the rest still joins there).
-fn merge_overlaps(pieces: Vec<Piece>, tol: f64, repairs: &mut Vec<Repair>) -> Vec<Piece> {
+/// The groups of pieces that overlap one another (directly or through others), each in
+/// ascending order, the groups in order of their first piece; and the pairs tried (the
+/// work done, which a test bounds).
+fn overlap_groups(pieces: &[Piece], tol: f64) -> (Vec<Vec<usize>>, usize) {
     let n = pieces.len();
-    let boxes: Vec<([f64; 2], [f64; 2])> = pieces.iter().map(|p| bounds(&p.seg)).collect();
+    let mut tried = 0;
+    let mut parent: Vec<usize> = (0..n).collect();
+    // a segment drawn again the same way (an array inserting a block at one place)
+    // overlaps what its first drawing overlaps: the copy joins the first drawing's group,
+    // only the first is tried against the others (a copy too short to overlap its first
+    // drawing is tried like any piece)
+    let mut first: HashMap<[u64; 5], usize> = HashMap::new();
+    let mut distinct: Vec<usize> = Vec::with_capacity(n);
+    for (i, p) in pieces.iter().enumerate() {
+        let s = &p.seg;
+        let key = [s.start[0], s.start[1], s.end[0], s.end[1], s.bulge].map(f64::to_bits);
+        if let Some(&f) = first.get(&key) {
+            tried += 1;
+            if overlap(&pieces[f].seg, s, tol) {
+                union(&mut parent, f, i);
+                continue;
+            }
+        } else {
+            first.insert(key, i);
+        }
+        distinct.push(i);
+    }
+    let boxes: Vec<([f64; 2], [f64; 2])> =
+        distinct.iter().map(|&i| bounds(&pieces[i].seg)).collect();
     let cell = {
         let total: f64 = boxes.iter().map(|(lo, hi)| dist(*lo, *hi)).sum();
-        (total / n.max(1) as f64).max(tol * 4.0)
+        (total / boxes.len().max(1) as f64).max(tol * 4.0)
     };
     let mut grid = Grid::new(cell);
-    for (i, (lo, hi)) in boxes.iter().enumerate() {
-        grid.insert(i, *lo, *hi);
+    for (k, (lo, hi)) in boxes.iter().enumerate() {
+        grid.insert(k, *lo, *hi);
     }
-    let mut parent: Vec<usize> = (0..n).collect();
-    for i in 0..n {
-        let (lo, hi) = boxes[i];
-        for j in grid.near([lo[0] - tol, lo[1] - tol], [hi[0] + tol, hi[1] + tol]) {
-            if j > i && overlap(&pieces[i].seg, &pieces[j].seg, tol) {
-                union(&mut parent, i, j);
+    for (k, &i) in distinct.iter().enumerate() {
+        let (lo, hi) = boxes[k];
+        for l in grid.near([lo[0] - tol, lo[1] - tol], [hi[0] + tol, hi[1] + tol]) {
+            if l > k {
+                let j = distinct[l];
+                tried += 1;
+                if overlap(&pieces[i].seg, &pieces[j].seg, tol) {
+                    union(&mut parent, i, j);
+                }
             }
         }
     }
-    let mut groups: HashMap<usize, Vec<usize>> = HashMap::new();
+    // the root of a group is its first piece
+    let mut groups: Vec<Vec<usize>> = vec![Vec::new(); n];
     for i in 0..n {
         let r = find(&mut parent, i);
-        groups.entry(r).or_default().push(i);
+        groups[r].push(i);
     }
-    let mut keys: Vec<usize> = groups.keys().copied().collect();
-    keys.sort_unstable();
-    let mut out = Vec::with_capacity(n);
-    for k in keys {
-        let members = &groups[&k];
+    groups.retain(|g| !g.is_empty());
+    (groups, tried)
+}
+
+/// Merges groups of overlapping pieces into the pieces of their union, split where the
+/// members ended (so the rest still joins there).
+fn merge_overlaps(pieces: Vec<Piece>, tol: f64, repairs: &mut Vec<Repair>) -> Vec<Piece> {
+    let (groups, _) = overlap_groups(&pieces, tol);
+    let mut out = Vec::with_capacity(pieces.len());
+    for members in &groups {
         if members.len() == 1 {
             out.push(pieces[members[0]]);
             continue;
@@ -780,4 +813,94 @@ fn trace(g: &Graph, alive: &mut [bool], pieces: &[Piece], chains: &mut Chains) -
         alive[e] = false;
     }
     bridged
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn piece(start: [f64; 2], end: [f64; 2], bulge: f64, src: usize) -> Piece {
+        Piece {
+            seg: Segment { start, end, bulge },
+            src,
+            cut: Cut::Either,
+        }
+    }
+
+    /// The groups as every pair tried gives them.
+    fn every_pair(pieces: &[Piece], tol: f64) -> Vec<Vec<usize>> {
+        let n = pieces.len();
+        let mut parent: Vec<usize> = (0..n).collect();
+        for i in 0..n {
+            for j in i + 1..n {
+                if overlap(&pieces[i].seg, &pieces[j].seg, tol) {
+                    union(&mut parent, i, j);
+                }
+            }
+        }
+        let mut groups: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for i in 0..n {
+            let r = find(&mut parent, i);
+            groups[r].push(i);
+        }
+        groups.retain(|g| !g.is_empty());
+        groups
+    }
+
+    /// Lines and arcs drawn twice, reversed, overlapping, touching, a hair apart and too
+    /// short to overlap, mixed: grouped as when every pair is tried.
+    #[test]
+    fn overlap_groups_are_those_of_every_pair() {
+        let tol = 0.05;
+        let mut pieces = Vec::new();
+        let mut add = |a: [f64; 2], b: [f64; 2], bulge: f64| {
+            let src = pieces.len();
+            pieces.push(piece(a, b, bulge, src));
+        };
+        for k in 0..3 {
+            let y = 10.0 * k as f64;
+            add([0.0, y], [100.0, y], 0.0);
+            add([0.0, y], [100.0, y], 0.0); // drawn twice
+            add([100.0, y], [0.0, y], 0.0); // reversed
+            add([50.0, y + 0.01], [150.0, y + 0.01], 0.0); // overlapping, a hair off
+            add([150.01, y], [200.0, y], 0.0); // touching only
+            add([300.0, y], [300.04, y], 0.0); // too short to overlap
+            add([300.0, y], [300.04, y], 0.0);
+            add([0.0, y + 0.2], [100.0, y + 0.2], 0.0); // parallel, too far
+            add([400.0, y], [420.0, y + 20.0], 0.5); // arcs
+            add([400.0, y], [420.0, y + 20.0], 0.5);
+            add([420.0, y + 20.0], [400.0, y], -0.5);
+        }
+        let (groups, _) = overlap_groups(&pieces, tol);
+        assert_eq!(groups, every_pair(&pieces, tol));
+        // the first line, its copies and the one overlapping it are one group
+        assert_eq!(groups[0], vec![0, 1, 2, 3]);
+        assert!(groups.contains(&vec![8, 9, 10]));
+        assert!(groups.contains(&vec![5]) && groups.contains(&vec![6]));
+    }
+
+    /// Thousands of copies of one segment (an array of a block inserting it at one place)
+    /// are grouped with a few tries each, not every pair (20,000 copies: 200 million).
+    #[test]
+    fn thousands_of_copies_are_grouped_in_linear_work() {
+        let n = 20_000;
+        let mut pieces: Vec<Piece> = (0..n)
+            .map(|k| match k % 4 {
+                0 | 1 => piece([0.0, 0.0], [100.0, 0.0], 0.0, k),
+                2 => piece([100.0, 0.0], [0.0, 0.0], 0.0, k),
+                _ => piece([0.0, 5.0], [10.0, 15.0], 0.3, k),
+            })
+            .collect();
+        pieces.push(piece([50.0, 0.0], [150.0, 0.0], 0.0, n));
+        let (groups, tried) = overlap_groups(&pieces, 0.05);
+        assert!(tried <= 3 * n, "{tried} pairs tried for {n} pieces");
+        assert_eq!(groups.len(), 2);
+        assert_eq!(groups[0].len(), 3 * n / 4 + 1);
+        assert_eq!(groups[1].len(), n / 4);
+        let mut repairs = Vec::new();
+        let merged = merge_overlaps(pieces, 0.05, &mut repairs);
+        // the line split where the members ended (0, 50, 100, 150), the arc as drawn
+        assert_eq!(merged.len(), 4, "{merged:?}");
+        assert_eq!(repairs.len(), 2);
+    }
 }

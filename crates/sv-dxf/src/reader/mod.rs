@@ -31,6 +31,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 
 use serde::Serialize;
+use sv_geom::text::{excerpt, printable};
 use sv_geom::Contour;
 
 pub use layers::{LayerRole, LayerRule, LayerRules};
@@ -238,15 +239,8 @@ fn load(bytes: &[u8]) -> Result<dxf::Drawing, String> {
             )
         }
     };
-    let chars: Vec<char> = message.chars().collect();
-    if chars.len() <= PARSER_MESSAGE_CHARS {
-        return Err(printable(&message));
-    }
     // the start and the end (where the place is), the quoted middle cut out
-    let half = PARSER_MESSAGE_CHARS / 2;
-    let head: String = chars[..half].iter().collect();
-    let tail: String = chars[chars.len() - half..].iter().collect();
-    Err(format!("{}...{}", printable(&head), printable(&tail)))
+    Err(excerpt(&message, PARSER_MESSAGE_CHARS))
 }
 
 thread_local! {
@@ -270,20 +264,6 @@ fn quietly<T>(f: impl FnOnce() -> T) -> std::thread::Result<T> {
     QUIET.with(|q| q.set(true));
     let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     QUIET.with(|q| q.set(false));
-    out
-}
-
-/// `text` from the file (a layer name, a parser message quoting a line) with its control
-/// characters escaped, so that a message stays on one line.
-fn printable(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        if c.is_control() {
-            out.extend(c.escape_debug());
-        } else {
-            out.push(c);
-        }
-    }
     out
 }
 

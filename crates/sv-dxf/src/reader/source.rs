@@ -7,11 +7,11 @@ use std::cell::Cell;
 use std::collections::{BTreeMap, HashMap};
 
 use dxf::entities::{Entity, EntityType};
+use sv_geom::text::printable;
 use sv_geom::{Contour, Segment, Vertex};
 
 use super::fit::{fit_arcs, Curve, Interpolant, Nurbs, MAX_SAMPLES};
 use super::layers::{LayerRole, LayerRules};
-use super::printable;
 use super::xform::{ocs, Affine};
 
 /// Where a piece came from: layer, entity type and handle (with the INSERTs it came
