@@ -94,6 +94,19 @@ fn union(parent: &mut [usize], a: usize, b: usize) {
     }
 }
 
+/// The sets of `parent` (a union-find over `0..n`), each ascending, in order of their
+/// root: [`union`] makes the smallest index the root, so in order of their first member.
+fn sets(parent: &mut [usize]) -> Vec<Vec<usize>> {
+    let n = parent.len();
+    let mut sets: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for i in 0..n {
+        let r = find(parent, i);
+        sets[r].push(i);
+    }
+    sets.retain(|g| !g.is_empty());
+    sets
+}
+
 fn bounds(s: &Segment) -> ([f64; 2], [f64; 2]) {
     let c = Contour::new(vec![
         Vertex::new(s.start[0], s.start[1], s.bulge),
@@ -229,14 +242,7 @@ fn overlap_groups(pieces: &[Piece], tol: f64) -> (Vec<Vec<usize>>, usize) {
             }
         }
     }
-    // the root of a group is its first piece
-    let mut groups: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for i in 0..n {
-        let r = find(&mut parent, i);
-        groups[r].push(i);
-    }
-    groups.retain(|g| !g.is_empty());
-    (groups, tried)
+    (sets(&mut parent), tried)
 }
 
 /// Merges groups of overlapping pieces into the pieces of their union, split where the
@@ -838,13 +844,7 @@ mod tests {
                 }
             }
         }
-        let mut groups: Vec<Vec<usize>> = vec![Vec::new(); n];
-        for i in 0..n {
-            let r = find(&mut parent, i);
-            groups[r].push(i);
-        }
-        groups.retain(|g| !g.is_empty());
-        groups
+        sets(&mut parent)
     }
 
     /// Lines and arcs drawn twice, reversed, overlapping, touching, a hair apart and too
