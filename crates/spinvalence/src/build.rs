@@ -338,7 +338,7 @@ pub struct Outcome {
 /// Load the designer's coarse layout (a quad OBJ, planarity not required).
 fn load_layout(path: &Path) -> Result<sv_frame::QuadMesh> {
     let bytes = output::read_bytes(path)?;
-    Ok(sv_io::read_layout_obj_bytes(
+    Ok(sv_io::read_quad_obj_bytes(
         &bytes,
         &path.display().to_string(),
     )?)

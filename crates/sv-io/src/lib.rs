@@ -5,11 +5,10 @@
 //! reader error is one line naming the file and the place ([`IoError`]), and no input
 //! makes a reader panic.
 //!
-//! - Hub mesh, OBJ quads (mm): [`read_quad_obj`], [`read_quad_obj_bytes`],
+//! - Hub mesh and the designer's coarse layout, OBJ quads (mm, every vertex within the
+//!   target's reach): [`read_quad_obj`], [`read_quad_obj_bytes`],
 //!   [`read_and_validate_quad_obj`] (adds [`sv_frame::QuadMesh::validate`]),
 //!   [`write_quad_obj`] (round-trips every `f64` exactly).
-//! - The designer's coarse layout, OBJ quads (mm, planarity not required):
-//!   [`read_layout_obj_bytes`] (the quad reader, every vertex within the target's reach).
 //! - Target surface, [`TriMesh`] from OBJ, ASCII STL or binary STL: [`read_tri_mesh`];
 //!   [`read_target`] also welds, orients and checks it, naming the file's lines.
 //! - `frame.json` v1 (model.md): [`frame_to_json`], [`frame_from_json`] (checks the
@@ -49,8 +48,7 @@ pub use frame_json::{
 };
 pub use frame_obj::frame_to_obj;
 pub use quad_obj::{
-    read_and_validate_quad_obj, read_layout_obj_bytes, read_quad_obj, read_quad_obj_bytes,
-    write_quad_obj,
+    read_and_validate_quad_obj, read_quad_obj, read_quad_obj_bytes, write_quad_obj,
 };
 pub use target::{read_target, TargetFile, TargetRepairs};
 pub use tri_mesh::{read_tri_mesh, TriMesh, WELD_RELATIVE_TOLERANCE};

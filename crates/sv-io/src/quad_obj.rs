@@ -24,8 +24,10 @@ use crate::IoError;
 ///
 /// # Errors
 /// One line naming the file and line, e.g.
-/// `hubs.obj:12: face has 3 vertices; a quad mesh needs 4 per face` or
-/// `hubs.obj: not an OBJ file (line 1: '...')`.
+/// `hubs.obj:12: face has 3 vertices; a quad mesh needs 4 per face`,
+/// `hubs.obj: not an OBJ file (line 1: '...')`, or `hubs.obj: vertex 2 at (1e308, 0, 0)
+/// is farther than 1e12 mm from the origin (a corrupt number, or not in mm?)` (1-based
+/// vertex numbers; the target reader's reach).
 pub fn read_quad_obj(text: &str, name: &str) -> Result<QuadMesh, IoError> {
     let data = parse_obj(text, name, "an OBJ")?;
     if data.faces.is_empty() {
@@ -36,6 +38,9 @@ pub fn read_quad_obj(text: &str, name: &str) -> Result<QuadMesh, IoError> {
                 data.vertices.len()
             ),
         ));
+    }
+    for (i, p) in data.vertices.iter().enumerate() {
+        within_reach(name, p, || format!("vertex {}", i + 1))?;
     }
     let mut faces = Vec::with_capacity(data.faces.len());
     for face in &data.faces {
@@ -67,22 +72,6 @@ pub fn read_quad_obj(text: &str, name: &str) -> Result<QuadMesh, IoError> {
 /// As [`read_quad_obj`].
 pub fn read_quad_obj_bytes(bytes: &[u8], name: &str) -> Result<QuadMesh, IoError> {
     read_quad_obj(&decode(bytes), name)
-}
-
-/// The designer's coarse layout (`--layout`, fitted to the target; planarity not required):
-/// [`read_quad_obj_bytes`], then every vertex within the reach the target reader allows
-/// (1e12 mm of the origin), so that a corrupt number is named here rather than failing the
-/// fit later.
-///
-/// # Errors
-/// As [`read_quad_obj`], or `layout.obj: vertex 1 at (1e308, 0, 0) is farther than 1e12 mm
-/// from the origin (a corrupt number, or not in mm?)` (1-based vertex numbers).
-pub fn read_layout_obj_bytes(bytes: &[u8], name: &str) -> Result<QuadMesh, IoError> {
-    let mesh = read_quad_obj_bytes(bytes, name)?;
-    for (i, p) in mesh.vertices.iter().enumerate() {
-        within_reach(name, p, || format!("vertex {}", i + 1))?;
-    }
-    Ok(mesh)
 }
 
 /// [`read_quad_obj`] followed by [`QuadMesh::validate`] (finite, non-degenerate, manifold,
@@ -169,7 +158,7 @@ mod tests {
     #[test]
     fn round_trip_is_exact() {
         let mut mesh = QuadMesh::sphere_cap(5, 4, 3000.0, 300.0);
-        mesh.vertices[0] = Point3::new(1e-7, -1.0 / 3.0, 1.234e17);
+        mesh.vertices[0] = Point3::new(1e-7, -1.0 / 3.0, 1.234_567_890_123_4e11);
         mesh.vertices[1].x = -0.0;
         let text = write_quad_obj(&mesh, "sphere cap\nR = 3000 mm");
         assert!(text.starts_with("# sphere cap\n# R = 3000 mm\n"));
@@ -242,15 +231,14 @@ mod tests {
     }
 
     #[test]
-    fn a_layout_vertex_far_out_is_named() {
+    fn a_vertex_far_out_is_named() {
         let mut text = write_quad_obj(&grid(), "");
         text = text.replacen("v 0 0 0\n", "v 0 0 0\nv 1e308 0 0\n", 1);
-        let e = read_layout_obj_bytes(text.as_bytes(), "layout.obj").unwrap_err();
+        let e = read_quad_obj_bytes(text.as_bytes(), "layout.obj").unwrap_err();
         assert_eq!(e.to_string(), "layout.obj: vertex 2 at (1e308, 0, 0) is farther than 1e12 mm from the origin (a corrupt number, or not in mm?)");
-        // the hub mesh reader, and the layout reader within reach, read it as before
-        assert!(read_quad_obj(&text, "hubs.obj").is_ok());
+        // within reach, it reads
         let near = text.replace("1e308", "1e12");
-        assert!(read_layout_obj_bytes(near.as_bytes(), "layout.obj").is_ok());
+        assert!(read_quad_obj(&near, "hubs.obj").is_ok());
     }
 
     #[test]

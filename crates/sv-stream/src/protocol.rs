@@ -543,6 +543,9 @@ pub fn to_text<T: Serialize>(message: &T) -> String {
 /// all, so its control characters are escaped and a long one loses its middle.
 const FIELD_ERROR_CHARS: usize = 160;
 
+/// Characters of a client's type or unit id quoted in an error (the middle cut out beyond).
+pub(crate) const QUOTED_CHARS: usize = 40;
+
 /// Parse a client message, telling unknown types from bad fields.
 pub fn parse_client(text: &str) -> Result<ClientMessage, (ErrorCode, String)> {
     if text.len() > MAX_MESSAGE_BYTES {
@@ -559,8 +562,8 @@ pub fn parse_client(text: &str) -> Result<ClientMessage, (ErrorCode, String)> {
         .ok_or((ErrorCode::UnknownType, "missing \"type\"".to_string()))?
         .to_string();
     if !CLIENT_TYPES.contains(&kind.as_str()) {
-        let shown: String = kind.chars().take(40).collect();
-        return Err((ErrorCode::UnknownType, format!("unknown type {shown:?}")));
+        let shown = excerpt(&kind, QUOTED_CHARS);
+        return Err((ErrorCode::UnknownType, format!("unknown type \"{shown}\"")));
     }
     serde_json::from_value(value).map_err(|e| {
         let why = excerpt(&e.to_string(), FIELD_ERROR_CHARS);

@@ -14,6 +14,7 @@
 use std::collections::{BTreeMap, HashMap};
 
 use sv_frame::FrameFile;
+use sv_geom::text::excerpt;
 use sv_geom::{Isometry3, Point3};
 
 use crate::geometry::{self, iso_of, kabsch, pose_of, transform_of, UnitTarget};
@@ -136,8 +137,8 @@ impl Plan {
     /// The index of a unit id, or `unknown_unit`.
     pub fn unit(&self, id: &str) -> Result<usize, Refusal> {
         self.index.get(id).copied().ok_or_else(|| {
-            let shown: String = id.chars().take(40).collect();
-            (ErrorCode::UnknownUnit, format!("no unit {shown:?}"))
+            let shown = excerpt(id, QUOTED_CHARS);
+            (ErrorCode::UnknownUnit, format!("no unit \"{shown}\""))
         })
     }
 
