@@ -182,3 +182,70 @@ fn bad_nest_input_is_one_line() {
         assert!(!dir.join("o/nest.json").exists());
     }
 }
+
+/// Copies of one part too long for the sheet: one warning line for them all, each named in
+/// nest.json with a reason that names no other part; when no part fits, an error after
+/// nest.json is written.
+#[test]
+fn parts_left_out_for_one_reason_are_one_line() {
+    let dir = Dir::new();
+    // six plates 1,500 mm long (the sheet is 1,200) and one that fits
+    let mut plates: Vec<(f64, f64, f64)> =
+        (0..6).map(|k| (2000.0 * k as f64, 1500.0, 80.0)).collect();
+    plates.push((20_000.0, 300.0, 100.0));
+    dir.write("long.dxf", dxf(&plates));
+    let args = |file: &'static str, out: &'static str| {
+        [
+            "nest",
+            file,
+            "--sheet",
+            "1200x600",
+            "--nest-evaluations",
+            "20000",
+            "--nest-seconds",
+            "3600",
+            "--out",
+            out,
+        ]
+    };
+    let out = dir.run(&args("long.dxf", "n"));
+    out.expect_code(0);
+    let warnings: Vec<&str> = out
+        .stderr
+        .lines()
+        .filter(|l| l.contains("left out"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{}", out.stderr);
+    assert!(
+        warnings[0].starts_with("warning: 6 parts (long#1, long#2, long#3, ..., long#6) left out: larger than every sheet"),
+        "{}",
+        warnings[0]
+    );
+    let report = read_json(&dir.join("n/nest.json"));
+    let left = report["left_out"].as_array().unwrap();
+    let named: Vec<&str> = left.iter().map(|l| l["part"].as_str().unwrap()).collect();
+    assert_eq!(
+        named,
+        ["long#1", "long#2", "long#3", "long#4", "long#5", "long#6"]
+    );
+    for l in left {
+        let reason = l["reason"].as_str().unwrap();
+        assert!(reason.starts_with("larger than every sheet"), "{reason}");
+        assert!(!reason.contains("long#"), "{reason}");
+    }
+    assert_eq!(report["sheets"].as_array().unwrap().len(), 1);
+
+    // nothing fits: exit 2, with nest.json naming every part
+    dir.write("longer.dxf", dxf(&plates[..6]));
+    let out = dir.run(&args("longer.dxf", "m"));
+    out.expect_code(2);
+    assert!(
+        out.stderr
+            .contains("nothing nested: all 6 part(s) were left out"),
+        "{}",
+        out.stderr
+    );
+    let report = read_json(&dir.join("m/nest.json"));
+    assert_eq!(report["left_out"].as_array().unwrap().len(), 6);
+    assert!(report["sheets"].as_array().unwrap().is_empty());
+}

@@ -118,8 +118,8 @@ INSIDE, ETCH, INFO; etching first, outside contours clockwise, inside ones count
 and before their outline; pierce points and labels on INFO) and .svg (or DIR/strip.json for
 an instance).
 Parts that cannot be nested (open or self-intersecting contours, larger than every sheet,
-unreadable files) are left out, each named on one `warning:` line on stderr and in
-nest.json's left_out; the others still nest (exit code 0). The layout is decided by a
+unreadable files) are left out, named on `warning:` lines on stderr (one line per reason)
+and each in nest.json's left_out; the others still nest (exit code 0; 2 when none could). The layout is decided by a
 work budget (collision evaluations: --nest-evaluations, else derived from --nest-seconds
 and the parts), so the same files, options and seed give the same sheets on every machine;
 --nest-seconds caps the wall time of the whole stage, and when it cuts the search short the

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
 use sv_export::{CutDirection, EtchOrder, SheetPart, ShopConvention};
-use sv_nest::sheets::LeftOut;
+use sv_nest::LeftOut;
 use sv_nest::{NestOptions, Part, RotationMode, StockSheet, StripInstance, StripOptions};
 
 use crate::cli::NestArgs;
@@ -171,9 +171,19 @@ pub fn run(args: &NestArgs) -> Result<()> {
                     etch: p.etch,
                     labels: Vec::new(),
                 }));
-                left_out.extend(read.rejected.into_iter().map(|e| LeftOut {
-                    part: name.clone(),
-                    reason: e.to_string(),
+                // a contour left out is named by its file and entities
+                left_out.extend(read.rejected.into_iter().map(|e| match e {
+                    sv_dxf::DxfError::BadPart { part, reason } => LeftOut {
+                        part: match part.strip_prefix(stem.as_str()) {
+                            Some(entities) => format!("{name}{entities}"),
+                            None => format!("{name}: {part}"),
+                        },
+                        reason,
+                    },
+                    sv_dxf::DxfError::Dxf { message, .. } => LeftOut {
+                        part: name.clone(),
+                        reason: message,
+                    },
                 }));
                 notes.extend(read.notes.into_iter().map(|n| sv_dxf::Note {
                     file: name.clone(),
@@ -225,9 +235,10 @@ pub fn run(args: &NestArgs) -> Result<()> {
     let stage_s = stage_started.elapsed().as_secs_f64();
     stage.report.left_out.extend(left_out);
     let report = &stage.report;
-    // one line per part left out, even with --quiet: the others were nested without it
-    for l in &report.left_out {
-        eprintln!("warning: {} left out: {}", l.part, l.reason);
+    // a line per reason parts were left out, even with --quiet: the others were nested
+    // without them
+    for (who, reason) in crate::sheets::left_out_groups(&report.left_out) {
+        eprintln!("warning: {who} left out: {reason}");
     }
     if let Some(w) = crate::sheets::cut_warning(report, args.nest_seconds) {
         eprintln!("{w}");
@@ -265,6 +276,13 @@ pub fn run(args: &NestArgs) -> Result<()> {
             text.push_str(&format!("note: {n}\n"));
         }
         output::print_out(&text)?;
+    }
+    if report.sheets.is_empty() {
+        bail!(
+            "nothing nested: all {} part(s) were left out (the warnings above; {} names each)",
+            report.left_out.len(),
+            args.out.join("nest.json").display()
+        );
     }
     Ok(())
 }

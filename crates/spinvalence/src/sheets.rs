@@ -2,12 +2,13 @@
 //! nest the parts onto sheets with a progress bar, then draw every sheet as DXF (the shop
 //! file) and SVG (the preview). Pure computation; the callers write the files atomically.
 
+use std::collections::HashMap;
 use std::time::Duration;
 
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
 use sv_export::{SheetCaption, SheetPart, ShopConvention};
-use sv_nest::{NestOptions, NestReport, Part};
+use sv_nest::{ById, LeftOut, NestOptions, NestReport, Part};
 
 use crate::solve::progress_bar;
 
@@ -109,15 +110,16 @@ pub fn run(
         thickness,
         generator: format!("spinvalence {}", env!("CARGO_PKG_VERSION")),
     };
+    let by_id = ById::new(parts, |p| &p.part.id);
     // every sheet drawn on its own core (in sheet order, whichever finishes first)
     let drawn: Vec<Result<(String, String, String)>> = (0..report.sheets.len())
         .into_par_iter()
         .map(|i| {
             let sheet = &report.sheets[i];
             let stem = sv_export::sheet_file_stem(i, sheet.width, sheet.height, thickness);
-            let dxf = sv_export::sheet_dxf(&report, i, parts, &caption, convention)
+            let dxf = sv_export::sheet_dxf(&report, i, &by_id, &caption, convention)
                 .map_err(|e| anyhow!("nesting: {e}"))?;
-            let svg = sv_export::sheet_svg(&report, &plain, i);
+            let svg = sv_export::sheet_svg(&report, &by_id, i);
             Ok((stem, dxf, svg))
         })
         .collect();
@@ -202,8 +204,9 @@ pub fn summary_rows(report: &NestReport, seconds: f64) -> Vec<Vec<String>> {
         .iter()
         .map(|s| format!("{:.1}", 100.0 * s.utilisation))
         .collect();
-    let mut rows = vec![vec![
-        "sheets".into(),
+    let sheets = if report.sheets.is_empty() {
+        "none".to_string()
+    } else {
         format!(
             "{} of {} x {} mm (lower bound {}), {} % used",
             report.sheets.len(),
@@ -211,8 +214,9 @@ pub fn summary_rows(report: &NestReport, seconds: f64) -> Vec<Vec<String>> {
             report.sheet.height,
             report.lower_bound_sheets,
             used.join(" / ")
-        ),
-    ]];
+        )
+    };
+    let mut rows = vec![vec!["sheets".into(), sheets]];
     if let Some(o) = &report.offcut {
         rows.push(vec![
             "offcut".into(),
@@ -236,10 +240,45 @@ pub fn summary_rows(report: &NestReport, seconds: f64) -> Vec<Vec<String>> {
             seconds,
         ),
     ]);
-    for l in &report.left_out {
-        rows.push(vec!["left out".into(), format!("{}: {}", l.part, l.reason)]);
+    for (who, reason) in left_out_groups(&report.left_out) {
+        rows.push(vec!["left out".into(), format!("{who}: {reason}")]);
     }
     rows
+}
+
+/// Parts named in a line of parts left out for one reason (the rest counted; `nest.json`
+/// names every one).
+const PARTS_NAMED: usize = 3;
+
+/// The parts left out by reason, in the order of their first part: (who, reason), who
+/// being the part, or for more than [`PARTS_NAMED`] parts their count, the first ones and
+/// the last (`70000 parts (a#1, a#2, a#3, ..., a#70000)`).
+pub fn left_out_groups(left_out: &[LeftOut]) -> Vec<(String, &str)> {
+    let mut groups: Vec<(&str, Vec<&str>)> = Vec::new();
+    let mut group_of: HashMap<&str, usize> = HashMap::new();
+    for l in left_out {
+        let g = *group_of.entry(&l.reason).or_insert_with(|| {
+            groups.push((&l.reason, Vec::new()));
+            groups.len() - 1
+        });
+        groups[g].1.push(&l.part);
+    }
+    groups
+        .into_iter()
+        .flat_map(|(reason, parts)| {
+            if parts.len() <= PARTS_NAMED {
+                parts
+                    .into_iter()
+                    .map(|p| (p.to_string(), reason))
+                    .collect::<Vec<_>>()
+            } else {
+                let first = parts[..PARTS_NAMED].join(", ");
+                let last = parts[parts.len() - 1];
+                let who = format!("{} parts ({first}, ..., {last})", parts.len());
+                vec![(who, reason)]
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]

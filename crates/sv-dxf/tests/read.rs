@@ -389,3 +389,75 @@ fn layer_names_with_control_characters_stay_on_one_line() {
         "{notes:?}"
     );
 }
+
+/// LINE entities from `pts` to the next, closed.
+fn lines(pts: &[[f64; 2]]) -> String {
+    let mut s = String::new();
+    for (k, a) in pts.iter().enumerate() {
+        let b = pts[(k + 1) % pts.len()];
+        s += &format!(
+            "0\nLINE\n8\n0\n10\n{}\n20\n{}\n11\n{}\n21\n{}\n",
+            a[0], a[1], b[0], b[1]
+        );
+    }
+    s
+}
+
+#[test]
+fn a_curve_drawn_as_lines_shorter_than_the_join_tolerance_stays_a_curve() {
+    // a 50 mm circle of 20,000 lines 0.016 mm long (the join tolerance is 0.05 mm), and
+    // beside it a square of lines with 0.03 mm gaps at its corners, which still close
+    let n = 20_000;
+    let circle: Vec<[f64; 2]> = (0..n)
+        .map(|k| {
+            let t = std::f64::consts::TAU * k as f64 / n as f64;
+            [50.0 * t.cos(), 50.0 * t.sin()]
+        })
+        .collect();
+    let mut text = String::from("0\nSECTION\n2\nENTITIES\n") + &lines(&circle);
+    for (a, b) in [
+        ([100.0, 0.0], [140.0, 0.0]),
+        ([140.0, 0.03], [140.0, 40.0]),
+        ([139.97, 40.0], [100.0, 40.0]),
+        ([100.0, 39.97], [100.0, 0.03]),
+    ] {
+        text += &format!(
+            "0\nLINE\n8\n0\n10\n{}\n20\n{}\n11\n{}\n21\n{}\n",
+            a[0], a[1], b[0], b[1]
+        );
+    }
+    text += "0\nENDSEC\n0\nEOF\n";
+    let read = read_dxf(text.as_bytes(), "fine", &ReadOptions::default()).unwrap();
+    assert!(read.rejected.is_empty(), "{:?}", read.rejected);
+    assert_eq!(read.parts.len(), 2);
+    let areas: Vec<f64> = read
+        .parts
+        .iter()
+        .map(|p| polygon_area(&p.outer.flatten(0.001)).abs())
+        .collect();
+    // the polygon of 20,000 sides, and the square (its corners moved by the joins)
+    let polygon = polygon_area(&circle);
+    assert!(
+        areas.iter().any(|a| (a - polygon).abs() < 1e-6 * polygon),
+        "{areas:?}"
+    );
+    assert!(areas.iter().any(|a| (a - 1600.0).abs() < 2.0), "{areas:?}");
+    // every vertex of the circle where it was drawn: no vertex joined a neighbour's
+    let circle_part = read
+        .parts
+        .iter()
+        .find(|p| p.outer.vertices.len() > 4)
+        .unwrap();
+    assert_eq!(circle_part.outer.vertices.len(), n);
+    let gaps: Vec<&str> = read
+        .notes
+        .iter()
+        .map(|n| n.what.as_str())
+        .filter(|w| w.contains("gap of"))
+        .collect();
+    assert_eq!(gaps.len(), 4, "{gaps:?}");
+    assert!(
+        gaps.iter().all(|w| w.contains("gap of 0.0300 mm closed")),
+        "{gaps:?}"
+    );
+}

@@ -3,13 +3,15 @@
 
 use std::fmt::Write;
 
-use sv_nest::{NestReport, Part};
+use sv_nest::{ById, NestReport};
+
+use crate::SheetPart;
 
 use crate::svg::{escape, path_data};
 
 /// SVG preview of sheet `index` of `report`; `parts` are the parts given to `nest_sheets`
-/// (looked up by id).
-pub fn sheet_svg(report: &NestReport, parts: &[Part], index: usize) -> String {
+/// (by id).
+pub fn sheet_svg(report: &NestReport, parts: &ById<'_, SheetPart>, index: usize) -> String {
     let sheet = &report.sheets[index];
     let (w, h) = (sheet.width, sheet.height);
     let mut s = String::new();
@@ -25,10 +27,10 @@ pub fn sheet_svg(report: &NestReport, parts: &[Part], index: usize) -> String {
     // model coordinates (y up) inside a flipped group
     let _ = writeln!(s, r#"<g transform="translate(0 {h}) scale(1 -1)">"#);
     for pl in &sheet.placements {
-        let Some(part) = parts.iter().find(|p| p.id == pl.strip) else {
+        let Some(sp) = parts.get(&pl.strip) else {
             continue;
         };
-        let moved = part.transformed(pl.rotation_deg, pl.translation);
+        let moved = sp.part.transformed(pl.rotation_deg, pl.translation);
         let mut d = path_data(&moved.outer, 3);
         for hole in &moved.holes {
             d.push_str(&path_data(hole, 3));

@@ -11,7 +11,7 @@
 use sv_dxf::{Drawing, LAYER_ETCH, LAYER_INFO, LAYER_INSIDE, LAYER_OUTSIDE};
 use sv_geom::planar::{bbox, point_in_polygon, polygon_area};
 use sv_geom::Contour;
-use sv_nest::{NestReport, Part, PartPlacement};
+use sv_nest::{ById, NestReport, Part, PartPlacement};
 use sv_strips::{FlatStrip, Label, StripProfile};
 
 use crate::strip::{label_strokes, mark_strokes};
@@ -372,7 +372,7 @@ fn outside_pierce(parts: &[Placed], k: usize, offset: f64, sheet: [f64; 2]) -> [
 pub fn sheet_dxf(
     report: &NestReport,
     index: usize,
-    parts: &[SheetPart],
+    parts: &ById<'_, SheetPart>,
     caption: &SheetCaption,
     convention: &ShopConvention,
 ) -> Result<String, String> {
@@ -387,16 +387,13 @@ pub fn sheet_dxf(
     let mut placed = Vec::with_capacity(sheet.placements.len());
     let mut etch = Vec::with_capacity(sheet.placements.len());
     for pl in &sheet.placements {
-        let sp = parts
-            .iter()
-            .find(|p| p.part.id == pl.strip)
-            .ok_or_else(|| {
-                format!(
-                    "sheet {}: part {:?} is not among the parts",
-                    index + 1,
-                    pl.strip
-                )
-            })?;
+        let sp = parts.get(&pl.strip).ok_or_else(|| {
+            format!(
+                "sheet {}: part {:?} is not among the parts",
+                index + 1,
+                pl.strip
+            )
+        })?;
         placed.push(Placed::new(
             sp.part.transformed(pl.rotation_deg, pl.translation),
         ));

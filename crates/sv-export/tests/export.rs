@@ -108,8 +108,9 @@ fn every_sheet_dxf_passes_the_ezdxf_audit_and_reads_back_as_its_parts() {
     };
     let mut files = Vec::new();
     let mut seen = Vec::new();
+    let by_id = sv_nest::ById::new(&parts, |p| &p.part.id);
     for (i, sheet) in report.sheets.iter().enumerate() {
-        let dxf = sv_export::sheet_dxf(&report, i, &parts, &caption, &Default::default()).unwrap();
+        let dxf = sv_export::sheet_dxf(&report, i, &by_id, &caption, &Default::default()).unwrap();
         let back = sv_dxf::parse_parts(&dxf, "sheet").unwrap();
         assert!(back.rejected.is_empty(), "{:?}", back.rejected);
         assert_eq!(back.parts.len(), sheet.placements.len());

@@ -180,27 +180,111 @@ pub fn boundary_distance(p: [f64; 2], poly: &[[f64; 2]]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// The first pair of non-adjacent edges of the closed polygon `pts` that touch or cross.
-pub fn self_intersection(pts: &[[f64; 2]]) -> Option<(usize, usize)> {
-    let n = pts.len();
-    for i in 0..n {
-        let (a, b) = (pts[i], pts[(i + 1) % n]);
-        for j in i + 1..n {
-            if j == i + 1 || (i == 0 && j == n - 1) {
-                continue;
-            }
-            let (c, d) = (pts[j], pts[(j + 1) % n]);
-            if segments_intersect(a, b, c, d) {
-                return Some((i, j));
-            }
-        }
+/// `(a - o) x (b - o)`: positive when `o, a, b` turn left.
+fn turn(o: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+}
+
+/// Convex hull of `pts` (Andrew's monotone chain): counter-clockwise from the lowest-x
+/// point, no collinear or repeated points (points closer than 1e-12 are one).
+pub fn convex_hull(pts: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let mut p = pts.to_vec();
+    p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    p.dedup_by(|a, b| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-12);
+    if p.len() < 3 {
+        return p;
     }
-    None
+    let mut hull: Vec<[f64; 2]> = Vec::with_capacity(p.len() + 1);
+    // the lower chain left to right, then the upper one back
+    for chain in [p.clone(), p.into_iter().rev().collect()] {
+        let start = hull.len();
+        for q in chain {
+            while hull.len() >= start + 2
+                && turn(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        // its last point is the other chain's first
+        hull.pop();
+    }
+    hull
+}
+
+/// The largest distance between two of `pts` (0 for fewer than two): rotating calipers on
+/// the convex hull, so `n log n` for any number of points.
+pub fn diameter(pts: &[[f64; 2]]) -> f64 {
+    let h = convex_hull(pts);
+    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    match h.len() {
+        0 | 1 => return 0.0,
+        2 => return dist(h[0], h[1]),
+        _ => {}
+    }
+    let n = h.len();
+    let mut best = 0.0_f64;
+    let mut j = 1;
+    for i in 0..n {
+        let (a, b) = (h[i], h[(i + 1) % n]);
+        // the vertex farthest from the edge's line
+        while turn(a, b, h[(j + 1) % n]) > turn(a, b, h[j]) {
+            j = (j + 1) % n;
+        }
+        best = best.max(dist(a, h[j])).max(dist(b, h[j]));
+    }
+    best
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hull_and_diameter_are_those_of_every_point() {
+        let mut state = 11_u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for case in 0..300 {
+            let n = 1 + case % 60;
+            let pts: Vec<[f64; 2]> = (0..n)
+                .map(|_| match case % 3 {
+                    // on a circle (every point on the hull), a small grid with repeats, anywhere
+                    0 => {
+                        let a = next() * std::f64::consts::TAU;
+                        [a.cos(), a.sin()]
+                    }
+                    1 => [(next() * 4.0).round(), (next() * 4.0).round()],
+                    _ => [next() * 100.0 - 50.0, next() * 3.0],
+                })
+                .collect();
+            let h = convex_hull(&pts);
+            // every point inside or on the hull, which turns left at every vertex
+            for k in 0..h.len() {
+                let (a, b) = (h[k], h[(k + 1) % h.len()]);
+                if h.len() >= 3 {
+                    assert!(turn(a, b, h[(k + 2) % h.len()]) > 0.0, "{h:?}");
+                    for &p in &pts {
+                        assert!(turn(a, b, p) >= -1e-9, "{p:?} outside {h:?}");
+                    }
+                }
+            }
+            let mut every = 0.0_f64;
+            for a in &pts {
+                for b in &pts {
+                    every = every.max((a[0] - b[0]).hypot(a[1] - b[1]));
+                }
+            }
+            assert!(
+                (diameter(&pts) - every).abs() <= 1e-12 * every.max(1.0),
+                "{pts:?}"
+            );
+        }
+    }
 
     #[test]
     fn collinear_segments_apart_are_measured_not_crossed() {

@@ -16,10 +16,10 @@ mod shape;
 pub mod sheets;
 pub mod strip;
 
-pub use part::{Contour, Part, Vertex, DEFAULT_FLATTEN_TOLERANCE};
+pub use part::{ById, Contour, Part, Vertex, DEFAULT_FLATTEN_TOLERANCE};
 pub use sheets::{
-    lower_bounds, nest_sheets, sheet_work_budget, LowerBounds, NestOptions, NestReport, Offcut,
-    PartPlacement, RotationMode, SearchReport, SheetReport, SheetSpec, StockSheet,
+    lower_bounds, nest_sheets, sheet_work_budget, LeftOut, LowerBounds, NestOptions, NestReport,
+    Offcut, PartPlacement, RotationMode, SearchReport, SheetReport, SheetSpec, StockSheet,
 };
 pub use strip::{
     nest_strip, strip_work_budget, Progress, StripInstance, StripOptions, StripPlacement,
@@ -36,16 +36,6 @@ pub enum NestError {
         part: String,
         /// what is wrong
         reason: String,
-    },
-    /// A part does not fit on any stock sheet in any allowed rotation.
-    #[error("part {part}: larger than every sheet ({width:.1} x {height:.1} mm with spacing)")]
-    TooLarge {
-        /// part id
-        part: String,
-        /// bounding box width of the part
-        width: f64,
-        /// bounding box height of the part
-        height: f64,
     },
     /// Invalid options.
     #[error("invalid options: {0}")]

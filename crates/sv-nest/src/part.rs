@@ -1,8 +1,9 @@
 //! Parts to nest: an outline and its holes as [`Contour`]s (the workspace's one arc
 //! contour, `sv_geom`), outline validation and placements that keep arcs as arcs.
 
+use std::collections::HashMap;
+
 use serde::{Deserialize, Serialize};
-use sv_geom::planar::self_intersection;
 pub use sv_geom::planar::{bbox, point_in_polygon, polygon_area, segments_intersect};
 pub use sv_geom::{Contour, Vertex};
 
@@ -13,6 +14,34 @@ use crate::NestError;
 /// The flattened outline is grown by this amount before nesting, so a coarser tolerance is
 /// still safe (never closer than the spacing) but wastes a little sheet.
 pub const DEFAULT_FLATTEN_TOLERANCE: f64 = 0.05;
+
+/// A list looked up by id in one step (the placements of a report name their parts by
+/// id); where ids repeat, the first item with the id.
+pub struct ById<'a, T> {
+    items: &'a [T],
+    index: HashMap<&'a str, usize>,
+}
+
+impl<'a, T> ById<'a, T> {
+    /// `items` by the id `id` gives each.
+    pub fn new(items: &'a [T], id: impl Fn(&'a T) -> &'a str) -> Self {
+        let mut index = HashMap::with_capacity(items.len());
+        for (i, item) in items.iter().enumerate() {
+            index.entry(id(item)).or_insert(i);
+        }
+        Self { items, index }
+    }
+
+    /// Where the first item with `id` is in the list.
+    pub fn position(&self, id: &str) -> Option<usize> {
+        self.index.get(id).copied()
+    }
+
+    /// The first item with `id`.
+    pub fn get(&self, id: &str) -> Option<&'a T> {
+        self.position(id).map(|i| &self.items[i])
+    }
+}
 
 /// A part to nest: an outer contour, inner cut-outs and an identifier.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -50,38 +79,17 @@ impl Part {
         }
     }
 
-    /// Flattens and validates the outer contour: finite, at least three distinct points,
-    /// positive area, no self-intersection. Returns a counter-clockwise polygon.
+    /// Validates the outer contour as the nesting does (finite, at least three distinct
+    /// points, positive area, no self-intersection, within cavalier's tolerance) and
+    /// flattens it within `tolerance`: a counter-clockwise polygon.
     pub fn validated_outline(&self, tolerance: f64) -> Result<Vec<[f64; 2]>, NestError> {
-        let bad = |reason: &str| NestError::BadPart {
+        crate::shape::outline(&self.outer).map_err(|reason| NestError::BadPart {
             part: self.id.clone(),
-            reason: reason.to_string(),
-        };
-        if self
-            .outer
-            .vertices
-            .iter()
-            .any(|v| !(v.x.is_finite() && v.y.is_finite() && v.bulge.is_finite()))
-        {
-            return Err(bad("non-finite coordinate"));
-        }
+            reason,
+        })?;
         let mut pts = self.outer.flatten(tolerance);
         dedup_points(&mut pts);
-        if pts.len() < 3 {
-            return Err(bad("outline has fewer than 3 distinct points (zero size)"));
-        }
-        if let Some((i, j)) = self_intersection(&pts) {
-            return Err(bad(&format!(
-                "outline is self-intersecting (segments {i} and {j})"
-            )));
-        }
-        let area = polygon_area(&pts);
-        let (lo, hi) = bbox(&pts);
-        let size = (hi[0] - lo[0]).min(hi[1] - lo[1]);
-        if area.abs() <= 1e-9 || size <= 1e-9 {
-            return Err(bad("outline has zero area"));
-        }
-        if area < 0.0 {
+        if polygon_area(&pts) < 0.0 {
             pts.reverse();
         }
         Ok(pts)

@@ -18,7 +18,7 @@ use jagua_rs::geometry::{AllowedOrientations, DTransformation, OriginalShape};
 use crate::engine::rotated_bbox;
 use crate::part::polygon_area;
 use crate::shape::{self, Congruence, Outline, Rigid, Signature};
-use crate::{NestError, Part};
+use crate::Part;
 use cavalier_contours::polyline::{PlineSource, Polyline};
 
 /// Pole surrogates of the shapes the construction places: as few poles as jagua-rs makes
@@ -99,8 +99,8 @@ pub(crate) struct Prepared {
     pub parts: Vec<PartInfo>,
     /// parts left out at once: (part index, reason)
     pub bad: Vec<(usize, String)>,
-    /// representative part of each kind and its checked outline (which defines the shape)
-    reps: Vec<(usize, Polyline<f64>)>,
+    /// the checked outline of each kind's representative part (which defines the shape)
+    reps: Vec<Polyline<f64>>,
     kinds: Vec<OnceLock<Result<Kind, String>>>,
     /// kinds in the order the construction first needs them
     jobs: Vec<usize>,
@@ -131,7 +131,7 @@ impl Prepared {
                     sigs.push(s);
                     owners.push(i);
                 }
-                Err(reason) => bad.push((i, format!("part {}: {reason}", parts[i].id))),
+                Err(reason) => bad.push((i, reason)),
             }
         }
         let mut groups = Congruence::new(CONGRUENT);
@@ -142,7 +142,7 @@ impl Prepared {
             let (kind, motion) = match groups.classify(k, &sigs) {
                 Some((r, m)) => (kind_of_rep[r], m),
                 None => {
-                    reps.push((owners[k], outlines[k].pline.clone()));
+                    reps.push(outlines[k].pline.clone());
                     kind_of_rep.resize(k + 1, usize::MAX);
                     kind_of_rep[k] = reps.len() - 1;
                     (reps.len() - 1, Rigid::IDENTITY)
@@ -194,9 +194,9 @@ impl Prepared {
 
     /// Makes items until none is left or [`Prepared::stop`] is called (a worker thread's
     /// loop).
-    pub fn work(&self, parts: &[Part], setup: &Setup) {
+    pub fn work(&self, setup: &Setup) {
         while !self.stop.load(Ordering::Relaxed) {
-            if !self.make_next(parts, setup) {
+            if !self.make_next(setup) {
                 break;
             }
         }
@@ -209,13 +209,12 @@ impl Prepared {
     }
 
     /// Makes the next item in line; `false` when all are taken.
-    fn make_next(&self, parts: &[Part], setup: &Setup) -> bool {
+    fn make_next(&self, setup: &Setup) -> bool {
         let j = self.next_job.fetch_add(1, Ordering::Relaxed);
         let Some(&kind) = self.jobs.get(j) else {
             return false;
         };
-        let (part, outline) = &self.reps[kind];
-        let made = make_kind(&parts[*part], outline, kind, setup);
+        let made = make_kind(&self.reps[kind], kind, setup);
         let _ = self.kinds[kind].set(made);
         let mut done = self.done.lock().unwrap_or_else(|e| e.into_inner());
         *done += 1;
@@ -224,12 +223,12 @@ impl Prepared {
     }
 
     /// The shape of `kind`, made by this thread when it is next in line, else waited for.
-    pub fn kind(&self, kind: usize, parts: &[Part], setup: &Setup) -> &Result<Kind, String> {
+    pub fn kind(&self, kind: usize, setup: &Setup) -> &Result<Kind, String> {
         loop {
             if let Some(k) = self.kinds[kind].get() {
                 return k;
             }
-            if !self.make_next(parts, setup) {
+            if !self.make_next(setup) {
                 let done = self.done.lock().unwrap_or_else(|e| e.into_inner());
                 if self.kinds[kind].get().is_none() {
                     // another thread is making it
@@ -269,13 +268,13 @@ pub(crate) fn parallel_map<T: Send>(n: usize, f: impl Fn(usize) -> T + Sync + Se
     (0..n).into_par_iter().map(f).collect()
 }
 
-/// The collision shape of `part` (a representative), as a jagua-rs item in coordinates
+/// The collision shape of a kind from its representative's outline `p`, as a jagua-rs item in coordinates
 /// centred on the shape, with the lower bound's area and a check that it fits some sheet.
 /// The grown outline is simplified outward (rounds become sharp corners, notches are
 /// filled), which can make it a little longer than the part: where that stand-in fits no
 /// sheet, the outline as flattened is tried, then with every round kept, so that a part as
 /// long as the sheet's margins allow is not refused for its stand-in.
-fn make_kind(part: &Part, p: &Polyline<f64>, kind: usize, setup: &Setup) -> Result<Kind, String> {
+fn make_kind(p: &Polyline<f64>, kind: usize, setup: &Setup) -> Result<Kind, String> {
     let lb_area = shape::grown(p, setup.half_spacing).area();
     let g = shape::grown(p, setup.grow);
     // the rounds of grown corners become sharp corners when that adds little
@@ -297,7 +296,7 @@ fn make_kind(part: &Part, p: &Polyline<f64>, kind: usize, setup: &Setup) -> Resu
             // tolerance): its convex hull is simple and still holds it
             shape::convex_hull(&poly)
         };
-        if let Some(made) = stand_in(part, &poly, kind, setup, lb_area)? {
+        if let Some(made) = stand_in(&poly, kind, setup, lb_area)? {
             return Ok(made);
         }
     }
@@ -306,17 +305,15 @@ fn make_kind(part: &Part, p: &Polyline<f64>, kind: usize, setup: &Setup) -> Resu
         .map(|e| ([e.min_x, e.min_y], [e.max_x, e.max_y]))
         .unwrap_or(([0.0; 2], [0.0; 2]));
     let s = 2.0 * setup.half_spacing;
-    Err(NestError::TooLarge {
-        part: part.id.clone(),
-        width: ohi[0] - olo[0] + s,
-        height: ohi[1] - olo[1] + s,
-    }
-    .to_string())
+    Err(format!(
+        "larger than every sheet ({:.1} x {:.1} mm with spacing)",
+        ohi[0] - olo[0] + s,
+        ohi[1] - olo[1] + s
+    ))
 }
 
 /// [`make_kind`] with the grown outline `poly`; `None` where it fits no sheet.
 fn stand_in(
-    part: &Part,
     poly: &[[f64; 2]],
     kind: usize,
     setup: &Setup,
@@ -334,7 +331,7 @@ fn stand_in(
     while pts.len() > 1 && pts.first() == pts.last() {
         pts.pop();
     }
-    let shape = SPolygon::new(pts).map_err(|e| format!("part {}: {e:#}", part.id))?;
+    let shape = SPolygon::new(pts).map_err(|e| format!("{e:#}"))?;
     let area = f64::from(shape.area());
     // already grown and simplified: jagua-rs takes it as it is
     let orig = OriginalShape {
@@ -345,7 +342,7 @@ fn stand_in(
     };
     let item = AllowedOrientations::new(setup.range.clone(), vec![])
         .and_then(|ao| Item::new(kind, kind as u64, orig.clone(), ao, None, PLACING_SURROGATE))
-        .map_err(|e| format!("part {}: {e:#}", part.id))?;
+        .map_err(|e| format!("{e:#}"))?;
     let rots: Vec<f32> = match &setup.range {
         RotationRange::None => vec![0.0],
         RotationRange::Discrete(r) => r.clone(),

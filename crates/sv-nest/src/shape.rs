@@ -16,11 +16,14 @@
 use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
 
+use cavalier_contours::core::Control;
 use cavalier_contours::polyline::{
-    PlineCreation, PlineOrientation, PlineSource, PlineSourceMut, PlineVertex, Polyline,
+    PlineCreation, PlineIntersect, PlineOrientation, PlineSource, PlineSourceMut, PlineVertex,
+    Polyline,
 };
 
 use crate::part::Contour;
+pub(crate) use sv_geom::planar::convex_hull;
 
 /// Positions closer than this (mm) are one vertex.
 const SAME_POINT: f64 = 1e-9;
@@ -89,16 +92,18 @@ pub(crate) fn outline(c: &Contour) -> Result<Polyline<f64>, String> {
         return Err("outline has zero area".into());
     }
     let mut first = None;
-    p.visit_self_intersects(&mut |i: cavalier_contours::polyline::PlineIntersect<f64>| {
-        first = Some(match i {
-            cavalier_contours::polyline::PlineIntersect::Basic(b) => {
-                (b.start_index1, b.start_index2)
-            }
-            cavalier_contours::polyline::PlineIntersect::Overlapping(o) => {
+    p.visit_self_intersects(&mut |i: PlineIntersect<f64>| {
+        let at = match i {
+            PlineIntersect::Basic(b) => (b.start_index1, b.start_index2),
+            PlineIntersect::Overlapping(o) => {
+                if runs_on(&p, o.start_index1, o.start_index2) {
+                    return Control::Continue;
+                }
                 (o.start_index1, o.start_index2)
             }
-        });
-        cavalier_contours::core::Control::Break(())
+        };
+        first = Some(at);
+        Control::Break(())
     });
     if let Some((i, j)) = first {
         return Err(format!(
@@ -120,6 +125,32 @@ pub(crate) fn outline(c: &Contour) -> Result<Polyline<f64>, String> {
     })
 }
 
+/// Whether segments `i` and `j` of the closed polyline `p`, which cavalier's tolerance
+/// calls overlapping, are neighbours where the one runs on from the other in the same
+/// direction: a curve drawn as thousands of short lines turns so little at each vertex
+/// that its neighbours look collinear, which is no fold. A real fold runs back.
+fn runs_on(p: &Polyline<f64>, i: usize, j: usize) -> bool {
+    let n = p.vertex_count();
+    let (a, b) = if (i + 1) % n == j {
+        (i, j)
+    } else if (j + 1) % n == i {
+        (j, i)
+    } else {
+        return false;
+    };
+    let segment = |k: usize| {
+        let (v, w) = (p.at(k), p.at((k + 1) % n));
+        sv_geom::Segment {
+            start: [v.x, v.y],
+            end: [w.x, w.y],
+            bulge: v.bulge,
+        }
+    };
+    let (_, into) = segment(a).tangent_angles();
+    let (out, _) = segment(b).tangent_angles();
+    (out - into).cos() > 0.0
+}
+
 /// A checked outline with what the construction orders parts by.
 pub(crate) struct Outline {
     pub pline: Polyline<f64>,
@@ -136,11 +167,7 @@ pub(crate) struct Outline {
 impl Outline {
     pub fn new(pline: Polyline<f64>) -> Self {
         // arcs count: a disc is two vertices and two half circles
-        let hull = convex_hull(&flatten_outside(&pline, 0.5, 0.0));
-        let diameter = hull
-            .iter()
-            .flat_map(|a| hull.iter().map(move |b| (a[0] - b[0]).hypot(a[1] - b[1])))
-            .fold(0.0, f64::max);
+        let diameter = sv_geom::planar::diameter(&flatten_outside(&pline, 0.5, 0.0));
         let bounds = pline.extents().map_or(([0.0; 2], [0.0; 2]), |e| {
             ([e.min_x, e.min_y], [e.max_x, e.max_y])
         });
@@ -151,34 +178,6 @@ impl Outline {
             pline,
         }
     }
-}
-
-/// Convex hull (counter-clockwise, Andrew's monotone chain).
-pub(crate) fn convex_hull(pts: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let mut p = pts.to_vec();
-    p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    p.dedup();
-    if p.len() < 3 {
-        return p;
-    }
-    let mut lower: Vec<[f64; 2]> = Vec::new();
-    for &q in &p {
-        while lower.len() >= 2 && cross(lower[lower.len() - 2], lower[lower.len() - 1], q) <= 0.0 {
-            lower.pop();
-        }
-        lower.push(q);
-    }
-    let mut upper: Vec<[f64; 2]> = Vec::new();
-    for &q in p.iter().rev() {
-        while upper.len() >= 2 && cross(upper[upper.len() - 2], upper[upper.len() - 1], q) <= 0.0 {
-            upper.pop();
-        }
-        upper.push(q);
-    }
-    lower.pop();
-    upper.pop();
-    lower.extend(upper);
-    lower
 }
 
 /// The outline grown by `d` >= 0 (a counter-clockwise polyline; the outer one when the

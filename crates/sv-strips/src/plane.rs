@@ -19,33 +19,13 @@ pub fn convex_intersection_area(a: &[Point2], b: &[Point2]) -> f64 {
     }
 }
 
-/// Convex hull (Andrew's monotone chain), counter-clockwise, no repeated points.
+/// [`sv_geom::planar::convex_hull`] of points as nalgebra points.
 pub(crate) fn convex_hull(points: &[Point2]) -> Vec<Point2> {
-    let mut p: Vec<Point2> = points.to_vec();
-    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    p.dedup_by(|a, b| (*a - *b).norm() < 1e-12);
-    if p.len() < 3 {
-        return p;
-    }
-    let mut h: Vec<Point2> = Vec::with_capacity(2 * p.len());
-    for pass in 0..2 {
-        let start = h.len();
-        let iter: Box<dyn Iterator<Item = &Point2>> = if pass == 0 {
-            Box::new(p.iter())
-        } else {
-            Box::new(p.iter().rev())
-        };
-        for q in iter {
-            while h.len() >= start + 2
-                && cross(&(h[h.len() - 1] - h[h.len() - 2]), &(q - h[h.len() - 2])) <= 0.0
-            {
-                h.pop();
-            }
-            h.push(*q);
-        }
-        h.pop();
-    }
-    h
+    let flat: Vec<[f64; 2]> = points.iter().map(|q| [q.x, q.y]).collect();
+    sv_geom::planar::convex_hull(&flat)
+        .into_iter()
+        .map(|q| Point2::new(q[0], q[1]))
+        .collect()
 }
 
 /// The minimum-area enclosing rectangle of a point set, as (angle of its longer side,

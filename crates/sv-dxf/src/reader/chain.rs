@@ -4,7 +4,8 @@
 //! on a cut layer, a title block's grid) the contour is the outer boundary and those lines
 //! are reported, not chained through.
 
-use std::collections::HashMap;
+use std::collections::hash_map::Entry;
+use std::collections::{HashMap, HashSet};
 
 use sv_geom::{Contour, Segment, Vertex};
 
@@ -466,6 +467,76 @@ impl Graph {
     }
 }
 
+/// The nodes of the piece ends `ends` (piece `k`'s start and end at `2k`, `2k + 1`) as a
+/// union-find parent array. An end drawn again at the same place joins its first drawing at
+/// once (many lines meeting at one point). Then a loose end (alone at its place) joins the
+/// nearest node within `tol`, the nearest pairs first, unless that would put both ends of
+/// one piece in one node. Two places where pieces already meet are not joined: a curve drawn
+/// as lines shorter than the tolerance stays a curve instead of every vertex joining its
+/// neighbours', down the whole chain, into one point.
+fn join_ends(ends: &[[f64; 2]], tol: f64) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..ends.len()).collect();
+    let mut first_at: HashMap<[u64; 2], usize> = HashMap::new();
+    let mut grid = Grid::new(tol);
+    let mut distinct = Vec::new();
+    for (i, p) in ends.iter().enumerate() {
+        match first_at.entry([p[0].to_bits(), p[1].to_bits()]) {
+            Entry::Occupied(first) => union(&mut parent, *first.get(), i),
+            Entry::Vacant(slot) => {
+                slot.insert(i);
+                grid.insert(i, *p, *p);
+                distinct.push(i);
+            }
+        }
+    }
+    // the ends at each place, and the pieces with an end there (by root)
+    let mut at: HashMap<usize, (usize, HashSet<usize>)> = HashMap::new();
+    for i in 0..ends.len() {
+        let r = find(&mut parent, i);
+        let node = at.entry(r).or_default();
+        node.0 += 1;
+        node.1.insert(i / 2);
+    }
+    let mut near: Vec<(f64, usize, usize)> = Vec::new();
+    for &i in &distinct {
+        if at[&i].0 != 1 {
+            continue;
+        }
+        let p = ends[i];
+        for j in grid.near([p[0] - tol, p[1] - tol], [p[0] + tol, p[1] + tol]) {
+            let d = dist(p, ends[j]);
+            // a pair of loose ends once
+            if j != i && d <= tol && (at[&j].0 != 1 || j > i) {
+                near.push((d, i.min(j), i.max(j)));
+            }
+        }
+    }
+    near.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
+    for (_, i, j) in near {
+        let (ri, rj) = (find(&mut parent, i), find(&mut parent, j));
+        if ri == rj || (at[&ri].0 != 1 && at[&rj].0 != 1) {
+            continue;
+        }
+        // the smaller node's pieces looked up in, then moved into, the larger's
+        let (big, small) = if at[&ri].1.len() >= at[&rj].1.len() {
+            (ri, rj)
+        } else {
+            (rj, ri)
+        };
+        if at[&small].1.iter().any(|k| at[&big].1.contains(k)) {
+            continue;
+        }
+        let (count, pieces) = at.remove(&small).unwrap_or_default();
+        let mut node = at.remove(&big).unwrap_or_default();
+        node.0 += count;
+        node.1.extend(pieces);
+        let (root, other) = (ri.min(rj), ri.max(rj));
+        at.insert(root, node);
+        parent[other] = root;
+    }
+    parent
+}
+
 /// Chains `pieces` into contours (see the module doc).
 pub(crate) fn chain(pieces: Vec<Piece>, closed: &[Closed], tol: f64) -> Chains {
     let mut chains = Chains::default();
@@ -479,18 +550,7 @@ pub(crate) fn chain(pieces: Vec<Piece>, closed: &[Closed], tol: f64) -> Chains {
         .iter()
         .flat_map(|p| [p.seg.start, p.seg.end])
         .collect();
-    let mut grid = Grid::new(tol);
-    for (i, p) in ends.iter().enumerate() {
-        grid.insert(i, *p, *p);
-    }
-    let mut parent: Vec<usize> = (0..ends.len()).collect();
-    for (i, p) in ends.iter().enumerate() {
-        for j in grid.near([p[0] - tol, p[1] - tol], [p[0] + tol, p[1] + tol]) {
-            if j > i && dist(*p, ends[j]) <= tol {
-                union(&mut parent, i, j);
-            }
-        }
-    }
+    let mut parent = join_ends(&ends, tol);
     let mut node_of: HashMap<usize, usize> = HashMap::new();
     let mut members: Vec<Vec<usize>> = Vec::new();
     let mut end_node = vec![0; ends.len()];
@@ -515,11 +575,8 @@ pub(crate) fn chain(pieces: Vec<Piece>, closed: &[Closed], tol: f64) -> Chains {
         })
         .collect();
     for (k, m) in members.iter().enumerate() {
-        let spread = m
-            .iter()
-            .flat_map(|&a| m.iter().map(move |&b| (a, b)))
-            .map(|(a, b)| dist(ends[a], ends[b]))
-            .fold(0.0, f64::max);
+        let points: Vec<[f64; 2]> = m.iter().map(|&i| ends[i]).collect();
+        let spread = sv_geom::planar::diameter(&points);
         if spread > 1e-6 {
             let mut srcs: Vec<usize> = m.iter().map(|&i| pieces[i / 2].src).collect();
             srcs.sort_unstable();

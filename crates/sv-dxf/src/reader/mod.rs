@@ -119,6 +119,12 @@ impl fmt::Display for Note {
     }
 }
 
+/// Handles named per layer and entity type in a line (the rest counted): a note about
+/// 40,000 entities stays a line one can read (`nest.json`'s notes list every one).
+const HANDLES_NAMED: usize = 8;
+
+/// `: layer 0: LINE 2A, 2B; ARC 3C`, by layer and entity type, at most [`HANDLES_NAMED`]
+/// handles each.
 fn entity_list(entities: &[EntityRef]) -> String {
     let mut by: BTreeMap<(&str, &str), Vec<&str>> = BTreeMap::new();
     for e in entities {
@@ -134,7 +140,11 @@ fn entity_list(entities: &[EntityRef]) -> String {
         } else {
             s.push_str(", ");
         }
-        s.push_str(&format!("{entity} {}", handles.join(", ")));
+        let named = handles.len().min(HANDLES_NAMED);
+        s.push_str(&format!("{entity} {}", handles[..named].join(", ")));
+        if handles.len() > named {
+            s.push_str(&format!(" and {} more", handles.len() - named));
+        }
     }
     s
 }

@@ -380,15 +380,7 @@ pub(crate) fn open_runs(
         return (attached, None);
     }
     let ends: Vec<[f64; 2]> = loose.iter().flat_map(|o| o.loose.iter().copied()).collect();
-    let mut best: Option<(f64, [f64; 2])> = None;
-    for i in 0..ends.len() {
-        for j in i + 1..ends.len() {
-            let d = (ends[i][0] - ends[j][0]).hypot(ends[i][1] - ends[j][1]);
-            if best.is_none_or(|b| d < b.0) {
-                best = Some((d, ends[i]));
-            }
-        }
-    }
+    let best = nearest_pair(&ends).map(|(d, i, _)| (d, ends[i]));
     let srcs: Vec<usize> = loose.iter().flat_map(|o| o.srcs.iter().copied()).collect();
     let why = match best {
         Some((d, p)) => format!(
@@ -400,6 +392,51 @@ pub(crate) fn open_runs(
         None => "open contour".into(),
     };
     (attached, Some((srcs, why)))
+}
+
+/// The two nearest of `points` (finite): their distance and indices, the one first in x
+/// (then y) first; `None` for fewer than two. A sweep in x keeping the points within the
+/// best distance so far in a tree ordered by y: `n log n` for any layout (loose ends
+/// stacked on one vertical line too).
+fn nearest_pair(points: &[[f64; 2]]) -> Option<(f64, usize, usize)> {
+    // an integer key with the order of the f64 (finite values)
+    let key = |v: f64| {
+        let b = v.to_bits() as i64;
+        b ^ (((b >> 63) as u64) >> 1) as i64
+    };
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| {
+        (points[a][0], points[a][1])
+            .partial_cmp(&(points[b][0], points[b][1]))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    let mut best: Option<(f64, usize, usize)> = None;
+    // (y key, index) of the points less than the best distance behind in x
+    let mut band = std::collections::BTreeSet::new();
+    let mut left = 0;
+    for &j in &order {
+        let q = points[j];
+        if let Some((d, _, _)) = best {
+            while points[order[left]][0] < q[0] - d {
+                band.remove(&(key(points[order[left]][1]), order[left]));
+                left += 1;
+            }
+        }
+        let (lo, hi) = match best {
+            Some((0.0, _, _)) => break,
+            Some((d, _, _)) => (key(q[1] - d), key(q[1] + d)),
+            None => (i64::MIN, i64::MAX),
+        };
+        for &(_, i) in band.range((lo, 0)..=(hi, usize::MAX)) {
+            let p = points[i];
+            let d = (p[0] - q[0]).hypot(p[1] - q[1]);
+            if best.is_none_or(|b| d < b.0) {
+                best = Some((d, i, j));
+            }
+        }
+        band.insert((key(q[1]), j));
+    }
+    best
 }
 
 #[cfg(test)]
@@ -421,6 +458,43 @@ mod tests {
     /// is compared with a few others, not with every copy around it (3,000 squares took
     /// 4.5 million comparisons); the classification is the same: the outermost a drawing
     /// border, then outline, hole, island outline, hole, ... with `--islands`.
+    #[test]
+    fn the_nearest_pair_is_that_of_every_pair() {
+        let every_pair = |pts: &[[f64; 2]]| {
+            let mut best = f64::INFINITY;
+            for i in 0..pts.len() {
+                for j in i + 1..pts.len() {
+                    best = best.min((pts[i][0] - pts[j][0]).hypot(pts[i][1] - pts[j][1]));
+                }
+            }
+            best
+        };
+        let mut state = 7_u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for case in 0..200 {
+            let n = 2 + case % 50;
+            let pts: Vec<[f64; 2]> = (0..n)
+                .map(|_| match case % 4 {
+                    // a vertical column, a grid with repeats, negative and mixed scales
+                    0 => [3.0, (next() * 100.0).round()],
+                    1 => [(next() * 5.0).round(), (next() * 5.0).round()],
+                    2 => [next() * -1e4, next() * 1e-3],
+                    _ => [next() * 1e3 - 500.0, next() * 1e3 - 500.0],
+                })
+                .collect();
+            let (d, i, j) = nearest_pair(&pts).unwrap();
+            assert_eq!(d, every_pair(&pts), "{pts:?}");
+            assert_eq!(d, (pts[i][0] - pts[j][0]).hypot(pts[i][1] - pts[j][1]));
+            assert_ne!(i, j);
+        }
+        assert_eq!(nearest_pair(&[[1.0, 2.0]]), None);
+    }
+
     #[test]
     fn thousands_of_nested_contours_are_compared_a_few_times_each() {
         let n = 3000;
