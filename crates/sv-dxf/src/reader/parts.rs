@@ -454,10 +454,6 @@ mod tests {
             .collect()
     }
 
-    /// Thousands of nested copies of one contour (a block inserting itself scaled): each
-    /// is compared with a few others, not with every copy around it (3,000 squares took
-    /// 4.5 million comparisons); the classification is the same: the outermost a drawing
-    /// border, then outline, hole, island outline, hole, ... with `--islands`.
     #[test]
     fn the_nearest_pair_is_that_of_every_pair() {
         let every_pair = |pts: &[[f64; 2]]| {
@@ -495,6 +491,10 @@ mod tests {
         assert_eq!(nearest_pair(&[[1.0, 2.0]]), None);
     }
 
+    /// Thousands of nested copies of one contour (a block inserting itself scaled): each
+    /// is compared with a few others, not with every copy around it (3,000 squares took
+    /// 4.5 million comparisons); the classification is the same: the outermost a drawing
+    /// border, then outline, hole, island outline, hole, ... with `--islands`.
     #[test]
     fn thousands_of_nested_contours_are_compared_a_few_times_each() {
         let n = 3000;
