@@ -672,6 +672,14 @@ fn prune(g: &Graph, alive: &mut [bool], pieces: &[Piece], chains: &mut Chains) -
         let r = find(&mut parent, g.edges[e].0);
         runs.entry(r).or_default().push(e);
     }
+    // each run's loose ends, in one pass over them
+    let mut loose_of: HashMap<usize, Vec<[f64; 2]>> = HashMap::new();
+    for &n in &loose {
+        loose_of
+            .entry(find(&mut parent, n))
+            .or_default()
+            .push(g.nodes[n]);
+    }
     let mut keys: Vec<usize> = runs.keys().copied().collect();
     keys.sort_unstable();
     for k in keys {
@@ -679,15 +687,9 @@ fn prune(g: &Graph, alive: &mut [bool], pieces: &[Piece], chains: &mut Chains) -
         let mut srcs: Vec<usize> = run.iter().map(|&e| pieces[g.edges[e].3].src).collect();
         srcs.sort_unstable();
         srcs.dedup();
-        let run_loose: Vec<[f64; 2]> = loose
-            .iter()
-            .copied()
-            .filter(|&n| find(&mut parent, n) == k)
-            .map(|n| g.nodes[n])
-            .collect();
         chains.open.push(Open {
             srcs,
-            loose: run_loose,
+            loose: loose_of.remove(&k).unwrap_or_default(),
         });
     }
     true
