@@ -477,11 +477,12 @@ fn sheets_section(input: &ReportInput<'_>) -> String {
         r.sheet.spacing,
         r.lower_bound_sheets
     );
+    let strips = input.strips_by_id();
     for (i, sheet) in r.sheets.iter().enumerate() {
         let _ = writeln!(
             h,
             "<figure>{}<figcaption>Sheet {}{}: {} x {} mm, {} strips, utilisation {:.1} %</figcaption></figure>",
-            sheet_svg(input, sheet, i),
+            sheet_svg(input, &strips, sheet, i),
             i + 1,
             nest.sheet_files
                 .get(i)

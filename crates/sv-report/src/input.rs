@@ -3,8 +3,8 @@
 use std::collections::HashMap;
 
 use sv_frame::FrameFile;
-use sv_nest::NestReport;
-use sv_strips::StripsFile;
+use sv_nest::{ById, NestReport};
+use sv_strips::{StripRecord, StripsFile};
 use sv_surface::SecondaryReport;
 
 use crate::ReportError;
@@ -50,7 +50,12 @@ pub struct Placement {
     pub rotation_deg: f64,
 }
 
-impl ReportInput<'_> {
+impl<'a> ReportInput<'a> {
+    /// The strips by id (the placements name them).
+    pub fn strips_by_id(&self) -> ById<'a, StripRecord> {
+        ById::new(&self.strips.strips, |s| &s.id)
+    }
+
     /// Check that the inputs belong together: every unit a strip or link names exists,
     /// every placed part is a strip, placed once.
     pub fn validate(&self) -> Result<(), ReportError> {
@@ -88,9 +93,10 @@ impl ReportInput<'_> {
         let Some(nest) = self.nest else {
             return Ok(out);
         };
+        let strips = self.strips_by_id();
         for (i, sheet) in nest.report.sheets.iter().enumerate() {
             for p in &sheet.placements {
-                let Some(strip) = self.strips.strips.iter().find(|s| s.id == p.strip) else {
+                let Some(strip) = strips.get(&p.strip) else {
                     return Err(ReportError::UnknownPart {
                         sheet: i + 1,
                         part: p.strip.clone(),

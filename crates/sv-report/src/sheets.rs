@@ -4,7 +4,7 @@
 use std::fmt::Write;
 
 use sv_export::svg_path_data;
-use sv_nest::SheetReport;
+use sv_nest::{ById, SheetReport};
 use sv_strips::StripRecord;
 
 use crate::plot::escape;
@@ -13,7 +13,12 @@ use crate::ReportInput;
 /// One sheet (`index`, 0-based) as an inline `<svg>` in mm: the stock, the margin, every
 /// placed strip with its slots and its id, the offcut. The root carries `data-sheet`
 /// (1-based) and `data-parts` (placed strips) for tests.
-pub fn sheet_svg(input: &ReportInput<'_>, sheet: &SheetReport, index: usize) -> String {
+pub fn sheet_svg(
+    input: &ReportInput<'_>,
+    strips: &ById<'_, StripRecord>,
+    sheet: &SheetReport,
+    index: usize,
+) -> String {
     let (w, h) = (sheet.width, sheet.height);
     let margin = input.nest.map_or(0.0, |n| n.report.sheet.margin);
     let mut s = String::new();
@@ -36,7 +41,7 @@ pub fn sheet_svg(input: &ReportInput<'_>, sheet: &SheetReport, index: usize) -> 
     }
     let mut labels = String::new();
     for (k, p) in sheet.placements.iter().enumerate() {
-        let Some(strip) = input.strips.strips.iter().find(|s| s.id == p.strip) else {
+        let Some(strip) = strips.get(&p.strip) else {
             continue;
         };
         let mut d = svg_path_data(&strip.outline, 1);
