@@ -11,7 +11,7 @@ use sv_frame::Progress;
 use sv_surface::{SecondaryReport, TargetMesh};
 
 use crate::cli::BuildArgs;
-use crate::config::{self, BuildConfig};
+use crate::config::{self, BuildConfig, Overlap, OverlapRule};
 use crate::output::{self, number, AtomicDir, AtomicFiles};
 use crate::solve::{progress_bar, seconds};
 use crate::{report, sheets, strips};
@@ -510,7 +510,11 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
             Some(j) => {
                 let mut joint = joint_rows(j, cfg.strips.direction, frame);
                 let tried_both = cfg.joints.both_directions && args.strip_direction.is_none();
-                joint.push(open_joints_row(frame, tried_both));
+                joint.push(open_joints_row(
+                    frame,
+                    tried_both,
+                    HeldLaps::of(cfg.frame.overlap),
+                ));
                 joint
             }
             None if cfg.joints.close => vec![vec![
@@ -1023,7 +1027,7 @@ fn link_name(frame: &sv_frame::FrameFile, units: [usize; 2]) -> String {
 
 /// The summary's row of the joints outside their limits: how many of each kind, the worst
 /// three by their excess over the limit (naming the units), and what would help.
-fn open_joints_row(frame: &sv_frame::FrameFile, tried_both: bool) -> Vec<String> {
+fn open_joints_row(frame: &sv_frame::FrameFile, tried_both: bool, laps: HeldLaps) -> Vec<String> {
     let limits = frame.params.joint_limits.unwrap_or_default();
     let mut open: Vec<(f64, String)> = Vec::new();
     let (mut bridges, mut welds) = (0, 0);
@@ -1078,7 +1082,7 @@ fn open_joints_row(frame: &sv_frame::FrameFile, tried_both: bool) -> Vec<String>
             "{bridges} bridges, {welds} welds of {} (worst: {}); {}",
             frame.links.len(),
             worst.join("; "),
-            open_joint_levers(tried_both, frame.params.hub_lap.is_some())
+            open_joint_levers(tried_both, laps)
         )
     };
     if turned.0 > 0 {
@@ -1104,20 +1108,46 @@ fn open_joints_row(frame: &sv_frame::FrameFile, tried_both: bool) -> Vec<String>
     vec!["joints outside limits".into(), text]
 }
 
+/// How the hub laps were held while the joints closed (`[frame] overlap`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum HeldLaps {
+    /// Free.
+    Free,
+    /// Held to one length the solve chose (`"constant"`).
+    Constant,
+    /// Held to the length asked (mm).
+    Asked,
+}
+
+impl HeldLaps {
+    fn of(overlap: Overlap) -> Self {
+        match overlap {
+            Overlap::Rule(OverlapRule::Free) => HeldLaps::Free,
+            Overlap::Rule(OverlapRule::Constant) => HeldLaps::Constant,
+            Overlap::Length(_) => HeldLaps::Asked,
+        }
+    }
+}
+
 /// What may close the joints a build left open: more iterations, the other strip direction
-/// where only one was tried and, where every hub lap was held to one length (`held_laps`),
-/// laps left free or a wider band (at 300 mm the built-in pavilion, dome and vault close
-/// every joint with free laps and leave 1 / 1 / 5 welds open with the laps held within
-/// 1 mm). A larger unit size or another spin angle is not named: measured, they opened more
-/// welds (docs/geometry.md 6.9).
-fn open_joint_levers(tried_both: bool, held_laps: bool) -> String {
+/// where only one was tried and, where every hub lap was held to one length, laps left free
+/// or a wider band (at 300 mm the built-in pavilion, dome and vault close every joint with
+/// free laps and leave 1 / 1 / 5 welds open with the laps held within 1 mm). A larger unit
+/// size only where the lap was asked in mm (the pavilion with 60 mm laps: 59 welds open at
+/// 300 mm, none at 330 mm); with laps free or chosen by the solve it opened more welds, as
+/// did another spin angle (docs/geometry.md 6.9).
+fn open_joint_levers(tried_both: bool, laps: HeldLaps) -> String {
     let mut levers = vec!["more [joints] max_iterations"];
     if !tried_both {
         levers.push("the other --strip-direction");
     }
-    if held_laps {
+    if laps == HeldLaps::Asked {
+        levers.push("a larger unit size (the lap asked a smaller share of it)");
+    }
+    if laps != HeldLaps::Free {
         levers.push("[frame] overlap = \"free\" or a wider overlap_tolerance");
     }
+    let held_laps = laps != HeldLaps::Free;
     let last = levers.pop().unwrap_or_default();
     let mut text = if levers.is_empty() {
         format!("{last} may close them")
@@ -1248,7 +1278,7 @@ fn summary_rows(
 
 #[cfg(test)]
 mod tests {
-    use super::{open_joint_levers, shallower_hub};
+    use super::{open_joint_levers, shallower_hub, HeldLaps};
     use sv_strips::ProfileParams;
 
     /// The value after `key = ` in `text`.
@@ -1301,11 +1331,11 @@ mod tests {
 
     #[test]
     fn open_joints_name_the_laps_held_to_one_length_and_the_direction_not_tried() {
-        let both = open_joint_levers(true, false);
+        let both = open_joint_levers(true, HeldLaps::Free);
         assert!(both.contains("both strip directions were tried"), "{both}");
         assert!(!both.contains("--strip-direction"), "{both}");
         assert!(!both.contains("overlap"), "{both}");
-        let held = open_joint_levers(false, true);
+        let held = open_joint_levers(false, HeldLaps::Constant);
         assert!(held.contains("the other --strip-direction"), "{held}");
         assert!(held.contains("[frame] overlap = \"free\""), "{held}");
         assert!(held.contains("cost closure"), "{held}");
@@ -1317,8 +1347,13 @@ mod tests {
                 "{text}"
             );
         }
+        // with the lap asked in mm, a larger unit closed them (the pavilion, 60 mm laps)
+        let asked = open_joint_levers(true, HeldLaps::Asked);
+        assert!(asked.contains("a larger unit size"), "{asked}");
+        assert!(asked.contains("[frame] overlap = \"free\""), "{asked}");
+        assert!(!asked.contains("spin"), "{asked}");
         assert_eq!(
-            open_joint_levers(false, false),
+            open_joint_levers(false, HeldLaps::Free),
             "more [joints] max_iterations or the other --strip-direction may close them"
         );
     }
