@@ -173,11 +173,10 @@ pub fn run(args: &NestArgs) -> Result<()> {
                 }));
                 // a contour left out is named by its file and entities
                 left_out.extend(read.rejected.into_iter().map(|e| match e {
-                    sv_dxf::DxfError::BadPart { part, reason } => LeftOut {
-                        part: match part.strip_prefix(stem.as_str()) {
-                            Some(entities) => format!("{name}{entities}"),
-                            None => format!("{name}: {part}"),
-                        },
+                    sv_dxf::DxfError::BadPart {
+                        entities, reason, ..
+                    } => LeftOut {
+                        part: format!("{name} ({entities})"),
                         reason,
                     },
                     sv_dxf::DxfError::Dxf { message, .. } => LeftOut {

@@ -42,10 +42,12 @@ pub const LAYER_INFO: &str = "INFO";
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DxfError {
     /// A contour that cannot be a part (open, zero size, ...), named by file and entities.
-    #[error("part {part}: {reason}")]
+    #[error("part {file} ({entities}): {reason}")]
     BadPart {
-        /// file name and the entities
-        part: String,
+        /// the file's name as the reader was given it
+        file: String,
+        /// the entities, by layer and type (`layer 0: LINE 8A, 8C`)
+        entities: String,
         /// what is wrong
         reason: String,
     },

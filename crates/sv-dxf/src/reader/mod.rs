@@ -400,35 +400,24 @@ pub fn read_dxf(bytes: &[u8], name: &str, options: &ReadOptions) -> Result<DxfPa
             "lines that end on contours without closing (bend, construction or title-block lines?): not cut".into(),
         ));
     }
+    let bad = |srcs: &[usize], reason: String| DxfError::BadPart {
+        file: name.to_string(),
+        entities: entity_list(&refs(srcs))
+            .trim_start_matches(": ")
+            .to_string(),
+        reason,
+    };
     let mut rejected: Vec<DxfError> = open
         .into_iter()
-        .map(|(srcs, reason)| DxfError::BadPart {
-            part: format!(
-                "{name} ({})",
-                entity_list(&refs(&srcs)).trim_start_matches(": ")
-            ),
-            reason,
-        })
+        .map(|(srcs, reason)| bad(&srcs, reason))
         .collect();
     let cands = parts::candidates(got.closed, chains.contours);
     let mut found = parts::classify(cands, &got.texts, options.join_tolerance, options.islands);
     for (srcs, what) in &found.rejected {
-        rejected.push(DxfError::BadPart {
-            part: format!(
-                "{name} ({})",
-                entity_list(&refs(srcs)).trim_start_matches(": ")
-            ),
-            reason: what.clone(),
-        });
+        rejected.push(bad(srcs, what.clone()));
     }
     if !got.zero.is_empty() {
-        rejected.push(DxfError::BadPart {
-            part: format!(
-                "{name} ({})",
-                entity_list(&refs(&got.zero)).trim_start_matches(": ")
-            ),
-            reason: "zero size".into(),
-        });
+        rejected.push(bad(&got.zero, "zero size".into()));
     }
     if found.parts.is_empty() && rejected.is_empty() {
         rejected.push(DxfError::Dxf {
