@@ -239,37 +239,32 @@ pub fn diameter(pts: &[[f64; 2]]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
-    #[test]
-    fn hull_and_diameter_are_those_of_every_point() {
-        let mut state = 11_u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
-        for case in 0..300 {
-            let n = 1 + case % 60;
-            let pts: Vec<[f64; 2]> = (0..n)
-                .map(|_| match case % 3 {
-                    // on a circle (every point on the hull), a small grid with repeats, anywhere
-                    0 => {
-                        let a = next() * std::f64::consts::TAU;
-                        [a.cos(), a.sin()]
-                    }
-                    1 => [(next() * 4.0).round(), (next() * 4.0).round()],
-                    _ => [next() * 100.0 - 50.0, next() * 3.0],
-                })
-                .collect();
+    /// Points on a circle (every one on the hull), on a small grid with repeats, or
+    /// anywhere in a long flat box; 1 to 60 of them.
+    fn point_sets() -> impl Strategy<Value = Vec<[f64; 2]>> {
+        let on_circle = (0.0..std::f64::consts::TAU).prop_map(|a: f64| [a.cos(), a.sin()]);
+        let on_grid = (0..5i32, 0..5i32).prop_map(|(x, y)| [f64::from(x), f64::from(y)]);
+        let anywhere = (-50.0..50.0f64, 0.0..3.0f64).prop_map(|(x, y)| [x, y]);
+        prop_oneof![
+            prop::collection::vec(on_circle, 1..60),
+            prop::collection::vec(on_grid, 1..60),
+            prop::collection::vec(anywhere, 1..60),
+        ]
+    }
+
+    proptest! {
+        #[test]
+        fn hull_and_diameter_are_those_of_every_point(pts in point_sets()) {
             let h = convex_hull(&pts);
             // every point inside or on the hull, which turns left at every vertex
             for k in 0..h.len() {
                 let (a, b) = (h[k], h[(k + 1) % h.len()]);
                 if h.len() >= 3 {
-                    assert!(turn(a, b, h[(k + 2) % h.len()]) > 0.0, "{h:?}");
+                    prop_assert!(turn(a, b, h[(k + 2) % h.len()]) > 0.0, "{h:?}");
                     for &p in &pts {
-                        assert!(turn(a, b, p) >= -1e-9, "{p:?} outside {h:?}");
+                        prop_assert!(turn(a, b, p) >= -1e-9, "{p:?} outside {h:?}");
                     }
                 }
             }
@@ -279,10 +274,7 @@ mod tests {
                     every = every.max((a[0] - b[0]).hypot(a[1] - b[1]));
                 }
             }
-            assert!(
-                (diameter(&pts) - every).abs() <= 1e-12 * every.max(1.0),
-                "{pts:?}"
-            );
+            prop_assert!((diameter(&pts) - every).abs() <= 1e-12 * every.max(1.0), "{pts:?}");
         }
     }
 

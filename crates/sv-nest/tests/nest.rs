@@ -547,14 +547,10 @@ fn l2_by_definition(a: &[f64], cap: f64) -> usize {
 
 #[test]
 fn lower_bounds_are_those_of_the_definition() {
+    use rand::{Rng, SeedableRng};
     // sizes from a few values (repeats, halves, near-full bins) and from anywhere
-    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(7);
+    let mut next = || rng.random::<f64>();
     let picks = [0.5, 0.25, 0.75, 0.1, 0.9, 0.6, 0.4, 1.0, 0.0];
     let mut compared = 0;
     for case in 0..300 {

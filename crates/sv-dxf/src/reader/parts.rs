@@ -442,6 +442,7 @@ fn nearest_pair(points: &[[f64; 2]]) -> Option<(f64, usize, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     /// `n` concentric squares, sides 1 to `n` mm, in file order from the smallest.
     fn nested_squares(n: usize) -> Vec<Candidate> {
@@ -454,40 +455,39 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn the_nearest_pair_is_that_of_every_pair() {
-        let every_pair = |pts: &[[f64; 2]]| {
-            let mut best = f64::INFINITY;
+    /// 2 to 50 loose ends: on one vertical column, on a small grid with repeats, over
+    /// mixed scales, or anywhere.
+    fn loose_ends() -> impl Strategy<Value = Vec<[f64; 2]>> {
+        let column = (0.0..100.0f64).prop_map(|y| [3.0, y.round()]);
+        let grid = (0..6i32, 0..6i32).prop_map(|(x, y)| [f64::from(x), f64::from(y)]);
+        let scales = (-1e4..0.0f64, 0.0..1e-3f64).prop_map(|(x, y)| [x, y]);
+        let anywhere = (-500.0..500.0f64, -500.0..500.0f64).prop_map(|(x, y)| [x, y]);
+        prop_oneof![
+            prop::collection::vec(column, 2..50),
+            prop::collection::vec(grid, 2..50),
+            prop::collection::vec(scales, 2..50),
+            prop::collection::vec(anywhere, 2..50),
+        ]
+    }
+
+    proptest! {
+        #[test]
+        fn the_nearest_pair_is_that_of_every_pair(pts in loose_ends()) {
+            let mut every = f64::INFINITY;
             for i in 0..pts.len() {
                 for j in i + 1..pts.len() {
-                    best = best.min((pts[i][0] - pts[j][0]).hypot(pts[i][1] - pts[j][1]));
+                    every = every.min((pts[i][0] - pts[j][0]).hypot(pts[i][1] - pts[j][1]));
                 }
             }
-            best
-        };
-        let mut state = 7_u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
-        for case in 0..200 {
-            let n = 2 + case % 50;
-            let pts: Vec<[f64; 2]> = (0..n)
-                .map(|_| match case % 4 {
-                    // a vertical column, a grid with repeats, negative and mixed scales
-                    0 => [3.0, (next() * 100.0).round()],
-                    1 => [(next() * 5.0).round(), (next() * 5.0).round()],
-                    2 => [next() * -1e4, next() * 1e-3],
-                    _ => [next() * 1e3 - 500.0, next() * 1e3 - 500.0],
-                })
-                .collect();
             let (d, i, j) = nearest_pair(&pts).unwrap();
-            assert_eq!(d, every_pair(&pts), "{pts:?}");
-            assert_eq!(d, (pts[i][0] - pts[j][0]).hypot(pts[i][1] - pts[j][1]));
-            assert_ne!(i, j);
+            prop_assert_eq!(d, every, "{:?}", pts);
+            prop_assert_eq!(d, (pts[i][0] - pts[j][0]).hypot(pts[i][1] - pts[j][1]));
+            prop_assert_ne!(i, j);
         }
+    }
+
+    #[test]
+    fn one_loose_end_has_no_nearest_pair() {
         assert_eq!(nearest_pair(&[[1.0, 2.0]]), None);
     }
 
