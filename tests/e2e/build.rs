@@ -97,6 +97,14 @@ fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
     assert!(out.stdout.contains(&units.to_string()), "{out:?}");
     let report = read_json(&dir.join("out/report.json"));
     assert_eq!(report["faces"].as_u64(), Some(units as u64));
+    // the fold check of the parts as cut is in the report: every row holds on the default
+    let fold = report["fold_check"]["rows"]
+        .as_array()
+        .expect("fold_check rows");
+    assert!(fold.len() > 10, "{fold:?}");
+    assert!(fold.iter().all(|r| r["ok"] == true), "{fold:?}");
+    let html = std::fs::read_to_string(dir.join("out/report.html")).unwrap();
+    assert!(html.contains("Every row holds: the parts as cut fold into the frame."));
     // the hub mesh on its own is a valid input of `solve`
     dir.run(&[
         "solve",

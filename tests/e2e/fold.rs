@@ -537,6 +537,24 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
     checked.expect_code(1);
     let laps = row(&checked, "hub lap as cut (mm, smallest)");
     assert!(laps.ends_with("FAIL"), "{laps}");
+    // the build's report says so too, not only its stderr: report.json's fold check has
+    // the row failing, report.html marks it
+    let fold = report["fold_check"]["rows"]
+        .as_array()
+        .expect("fold_check rows");
+    let lap_row = fold
+        .iter()
+        .find(|r| r["name"] == "hub lap as cut (mm, smallest)")
+        .expect("lap row");
+    assert_eq!(lap_row["ok"], false, "{lap_row}");
+    assert!(f(lap_row, "worst") < f(lap_row, "limit"), "{lap_row}");
+    let html = fs::read_to_string(dir.join("given/report.html")).unwrap();
+    let failing = fold.iter().filter(|r| r["ok"] == false).count();
+    assert!(
+        html.contains(&format!("{failing} of {} rows fail", fold.len()))
+            && html.contains("<tr class=\"fail\"><th>hub lap as cut (mm, smallest)</th>"),
+        "report.html does not show the failing fold check"
+    );
 
     // At 150 mm no sheet the profile's rules allow laps 25 mm: 1.5 mm sheet at its least
     // widths puts the hub 1.5 + 3 + 2 x 3 + 9 = 19.5 mm inside its tile, and a flat grid's

@@ -625,11 +625,21 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         report: &nested.report,
         sheet_files: &nested.sheet_files,
     };
-    let report_stage = report::run(&cfg.target, &frame, &stage.file, Some(nest_input), &report)?;
+    let report_stage = report::run(
+        &cfg.target,
+        &frame,
+        &stage.file,
+        Some(nest_input),
+        &report,
+        Some(&fold),
+    )?;
     let report_s = t4.elapsed().as_secs_f64();
 
     let [mesh_obj, frame_obj, frame_json] = frame_texts(&cfg.target, &mesh, &frame);
-    let report_json = serde_json::to_string_pretty(&report)?;
+    let report_json = serde_json::to_string_pretty(&ReportJson {
+        hub_mesh: &report,
+        fold_check: Some(&fold),
+    })?;
     let timings = Timings {
         secondary: secondary_s,
         primary: primary_s,
@@ -680,6 +690,17 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         fold_warning: fold_warning(&fold),
         partial: false,
     })
+}
+
+/// `report.json`: the hub mesh against the target (the fields of `SecondaryReport`, at the
+/// top level as before) and, where the strips were cut, the fold check of the parts as cut
+/// (`spinvalence check DIR`'s rows).
+#[derive(serde::Serialize)]
+struct ReportJson<'a> {
+    #[serde(flatten)]
+    hub_mesh: &'a SecondaryReport,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    fold_check: Option<&'a sv_frame::CheckReport>,
 }
 
 /// The summary's `strips` row: how many, the longest, the worst pin bend and twist, and
@@ -756,14 +777,17 @@ fn write_without_strips(
         frame.params.expansion,
         &sv_strips::StripOptions::default(),
     );
-    let html = report::run(&cfg.target, frame, &no_strips, None, report)?.html;
+    let html = report::run(&cfg.target, frame, &no_strips, None, report, None)?.html;
     let [mesh_obj, frame_obj, frame_json] = frame_texts(&cfg.target, mesh, frame);
     let written = files.commit(&[
         &mesh_obj,
         &frame_obj,
         &html,
         &serde_json::to_string_pretty(timings)?,
-        &serde_json::to_string_pretty(report)?,
+        &serde_json::to_string_pretty(&ReportJson {
+            hub_mesh: report,
+            fold_check: None,
+        })?,
         &frame_json,
     ])?;
     for dir in dirs {

@@ -174,15 +174,7 @@ pub fn render(report: &CheckReport) -> String {
                 "-".into()
             },
             row.at.clone(),
-            // a row without a limit informs: nothing holds it yet
-            if row.limit.is_infinite() {
-                "info"
-            } else if row.ok {
-                "ok"
-            } else {
-                "FAIL"
-            }
-            .to_string(),
+            row.verdict().to_string(),
         ]);
     }
     output::table(&rows)

@@ -2,7 +2,7 @@
 //! stages (sv-report, pure). `build` writes them with the other files, all or nothing.
 
 use anyhow::{anyhow, Result};
-use sv_frame::FrameFile;
+use sv_frame::{CheckReport, FrameFile};
 use sv_report::{NestInput, ReportInput, Summary};
 use sv_strips::StripsFile;
 use sv_surface::SecondaryReport;
@@ -27,6 +27,7 @@ pub fn run(
     strips: &StripsFile,
     nest: Option<NestInput<'_>>,
     hub_mesh: &SecondaryReport,
+    fold_check: Option<&CheckReport>,
 ) -> Result<ReportStage> {
     let generator = format!("spinvalence {}", env!("CARGO_PKG_VERSION"));
     let input = ReportInput {
@@ -36,6 +37,7 @@ pub fn run(
         strips,
         nest,
         hub_mesh: Some(hub_mesh),
+        fold_check,
     };
     let html = sv_report::report_html(&input).map_err(|e| anyhow!("report: {e}"))?;
     let bom = sv_report::bom_csv(&input).map_err(|e| anyhow!("report: {e}"))?;

@@ -1,5 +1,6 @@
 //! Re-verification of a frame file against the invariants of model.md.
 
+use serde::Serialize;
 use sv_geom::{segment_closest, Matrix3, Point3, Real, Vector3};
 
 use crate::solve::hub_overlap;
@@ -37,8 +38,8 @@ impl Default for CheckOptions {
     }
 }
 
-/// One row of the check table.
-#[derive(Clone, Debug, PartialEq)]
+/// One row of the check table (in `report.json` a limit that holds nothing is `null`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CheckRow {
     /// What was checked.
     pub name: String,
@@ -52,8 +53,22 @@ pub struct CheckRow {
     pub ok: bool,
 }
 
+impl CheckRow {
+    /// What the row says: `info` where no limit holds it (nothing is checked yet), else
+    /// `ok` or `FAIL`.
+    pub fn verdict(&self) -> &'static str {
+        if self.limit.is_infinite() {
+            "info"
+        } else if self.ok {
+            "ok"
+        } else {
+            "FAIL"
+        }
+    }
+}
+
 /// The check table.
-#[derive(Clone, Debug, PartialEq, Default)]
+#[derive(Clone, Debug, PartialEq, Default, Serialize)]
 pub struct CheckReport {
     /// Rows.
     pub rows: Vec<CheckRow>,

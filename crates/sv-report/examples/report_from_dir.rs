@@ -35,6 +35,7 @@ fn main() -> Result<(), String> {
             sheet_files: &sheet_files,
         }),
         hub_mesh: hub_mesh.as_ref(),
+        fold_check: None,
     };
     let started = std::time::Instant::now();
     let html = sv_report::report_html(&input).map_err(|e| e.to_string())?;

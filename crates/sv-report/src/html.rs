@@ -216,6 +216,9 @@ fn summary_section(input: &ReportInput<'_>, s: &Summary) -> String {
     }
     h.push_str("</table>\n");
     h.push_str(&quality_table(input));
+    if let Some(fold) = input.fold_check {
+        h.push_str(&fold_table(fold));
+    }
     h.push_str("</section>\n");
     h
 }
@@ -237,6 +240,45 @@ fn link_gaps(frame: &sv_frame::FrameFile) -> (Vec<f64>, &'static str) {
             "primary gap",
         )
     }
+}
+
+/// The fold check of the parts as cut (`spinvalence check DIR`): a line saying whether every
+/// row holds, then every row, the failing ones marked.
+fn fold_table(fold: &sv_frame::CheckReport) -> String {
+    let failing = fold.rows.iter().filter(|r| !r.ok).count();
+    let verdict = if failing == 0 {
+        "Every row holds: the parts as cut fold into the frame.".to_string()
+    } else {
+        format!(
+            "{failing} of {} rows fail: the steel as cut does not fold into the frame there \
+             (the build exits 0 with a warning; spinvalence check exits 1).",
+            fold.rows.len()
+        )
+    };
+    let mut h = format!(
+        "<h3 style=\"margin-top:16px\">Fold check of the parts as cut</h3>\n<p class=\"fold-verdict{}\">{}</p>\n<table class=\"quality fold\"><tr><th>check</th><th>worst</th><th>limit</th><th>where</th><th></th></tr>",
+        if failing == 0 { "" } else { " fail" },
+        escape(&verdict)
+    );
+    for r in &fold.rows {
+        let limit = if r.limit.is_finite() {
+            short(r.limit)
+        } else {
+            "-".into()
+        };
+        let _ = write!(
+            h,
+            "<tr class=\"{}\"><th>{}</th><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            if r.ok { "" } else { "fail" },
+            escape(&r.name),
+            escape(&short(r.worst)),
+            escape(&limit),
+            escape(&r.at),
+            r.verdict()
+        );
+    }
+    h.push_str("</table>\n");
+    h
 }
 
 /// Frame and hub mesh quality, from the files' own figures.

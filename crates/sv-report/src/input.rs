@@ -2,7 +2,7 @@
 
 use std::collections::HashMap;
 
-use sv_frame::FrameFile;
+use sv_frame::{CheckReport, FrameFile};
 use sv_nest::{ById, NestReport};
 use sv_strips::{StripRecord, StripsFile};
 use sv_surface::SecondaryReport;
@@ -25,6 +25,8 @@ pub struct ReportInput<'a> {
     pub nest: Option<NestInput<'a>>,
     /// Hub mesh quality against the target (`report.json`), when known.
     pub hub_mesh: Option<&'a SecondaryReport>,
+    /// The fold check of the parts as cut (`spinvalence check DIR`), when it was run.
+    pub fold_check: Option<&'a CheckReport>,
 }
 
 /// The nesting results: `nest.json` and the file of every sheet.

@@ -32,7 +32,7 @@
 //! let file = StripsFile::new(&strips, &profiles, &params, 1.0, &StripOptions::default());
 //! let input = sv_report::ReportInput {
 //!     target: "grid 3 x 2", generator: "doc test", frame: &frame, strips: &file,
-//!     nest: None, hub_mesh: None,
+//!     nest: None, hub_mesh: None, fold_check: None,
 //! };
 //! let summary = sv_report::Summary::of(&input);
 //! assert_eq!((summary.units, summary.strips, summary.sheets), (6, 2, None));

@@ -58,6 +58,7 @@ fn input<'a>(
         strips,
         nest,
         hub_mesh: None,
+        fold_check: None,
     }
 }
 
@@ -188,4 +189,42 @@ fn parts_that_are_not_strips_or_placed_twice_are_errors() {
             .to_string(),
         "strip A01: unit 99 is not in the frame (12 units)"
     );
+}
+
+#[test]
+fn the_fold_check_is_shown_with_its_failing_rows_marked() {
+    use sv_frame::{CheckReport, CheckRow};
+    let (frame, strips) = build();
+    let row = |name: &str, worst: f64, limit: f64, ok: bool| CheckRow {
+        name: name.into(),
+        worst,
+        limit,
+        at: format!("at {name}"),
+        ok,
+    };
+    let fold = CheckReport {
+        rows: vec![
+            row("leg between its necks", 0.08, 0.5, true),
+            row("weld: plates apart (mm)", 2.75, 1.5, false),
+            row("widest gap (not held)", 24.0, f64::INFINITY, true),
+        ],
+    };
+    let without = report_html(&input(&frame, &strips, None)).unwrap();
+    assert!(!without.contains("Fold check of the parts as cut"));
+    let mut shown = input(&frame, &strips, None);
+    shown.fold_check = Some(&fold);
+    let html = report_html(&shown).unwrap();
+    assert!(html.contains("Fold check of the parts as cut"));
+    assert!(html.contains("1 of 3 rows fail"), "verdict missing");
+    assert_eq!(html.matches("<tr class=\"fail\">").count(), 1);
+    assert!(html.contains(
+        "<tr class=\"fail\"><th>weld: plates apart (mm)</th><td>2.750</td><td>1.500</td><td>at weld: plates apart (mm)</td><td>FAIL</td></tr>"
+    ));
+    assert!(html.contains("<td>24.00</td><td>-</td><td>at widest gap (not held)</td><td>info</td>"));
+    let mut held = fold.clone();
+    held.rows[1].ok = true;
+    held.rows[1].worst = 1.0;
+    shown.fold_check = Some(&held);
+    let html = report_html(&shown).unwrap();
+    assert!(html.contains("Every row holds") && !html.contains("<tr class=\"fail\">"));
 }
