@@ -327,6 +327,41 @@ fn a_target_in_metres_is_named_with_its_bounding_box() {
 }
 
 #[test]
+fn a_target_needing_more_units_than_a_build_takes_is_refused_at_once() {
+    let dir = Dir::new();
+    // 10 x 8 km: about 8.9e8 units of 300 mm (the build once asked for 21.6 GB here)
+    dir.write(
+        "site.obj",
+        "v 0 0 0\nv 1e7 0 0\nv 1e7 8e6 0\nv 0 8e6 0\nf 1 2 3\nf 1 3 4\n",
+    );
+    let out = dir.run(&["build", "--target", "site.obj", "--out", "o"]);
+    out.expect_code(2);
+    let line = out.one_error_line();
+    assert!(
+        line.contains("bounding box is 1.00e7 x 8.00e6 x 0 mm")
+            && line.contains("needs about 888888889 units, more than the 100000 a build takes")
+            && line.contains("at least 28285 mm"),
+        "{out:?}"
+    );
+    assert!(!dir.join("o").exists());
+    // the unit size it names is taken
+    let near = dir.run(&[
+        "build",
+        "--target",
+        "site.obj",
+        "--unit-size",
+        "28000",
+        "--out",
+        "o",
+    ]);
+    near.expect_code(2);
+    assert!(
+        near.one_error_line().contains("at least 28285 mm"),
+        "{near:?}"
+    );
+}
+
+#[test]
 fn an_obj_triangle_soup_with_mixed_orientation_builds() {
     let dir = Dir::new();
     // a 3 x 2 m flat plate, every triangle with its own corners, every other one reversed

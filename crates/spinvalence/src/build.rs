@@ -149,11 +149,21 @@ pub fn load_target(spec: &str, unit: f64, quiet: bool) -> Result<TargetMesh> {
         let bytes = output::read_bytes(path)?;
         let file = sv_io::read_target(&bytes, spec)?;
         let r = file.repairs;
-        if !quiet && (r.welded > 0 || r.dropped > 0 || r.flipped > 0) {
-            eprintln!(
-                "note: {spec}: welded {} duplicate vertices, dropped {} collapsed triangles, turned {} triangles to their neighbours' orientation",
-                r.welded, r.dropped, r.flipped
-            );
+        let repairs: Vec<String> = [
+            (r.welded, "welded {} duplicate vertices"),
+            (r.unused, "left out {} vertices no face uses"),
+            (r.dropped, "dropped {} collapsed triangles"),
+            (
+                r.flipped,
+                "turned {} triangles to their neighbours' orientation",
+            ),
+        ]
+        .iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|(n, text)| text.replace("{}", &n.to_string()))
+        .collect();
+        if !quiet && !repairs.is_empty() {
+            eprintln!("note: {spec}: {}", repairs.join(", "));
         }
         TargetMesh {
             vertices: file.mesh.vertices,
@@ -272,8 +282,15 @@ fn no_sheet_welds(
     )
 }
 
+/// Units a build takes at most: ten times the 10,000 of the benchmarks. A target that
+/// needs more (a site plan in mm with 300 mm units, a target in micrometres) would take
+/// gigabytes and hours before a first result; it is refused at once with the unit size
+/// that fits.
+const MAX_UNITS: f64 = 100_000.0;
+
 /// A target too small for 2 x 2 units is most often drawn in metres or inches: say so
-/// with its bounding box and what it would measure in those units.
+/// with its bounding box and what it would measure in those units. One that needs more
+/// than [`MAX_UNITS`] is refused with the unit size that would fit.
 fn check_units(spec: &str, mesh: &TargetMesh, unit: f64) -> Result<()> {
     let Some(first) = mesh.vertices.first() else {
         return Ok(());
@@ -287,9 +304,6 @@ fn check_units(spec: &str, mesh: &TargetMesh, unit: f64) -> Result<()> {
         let [p, q, r] = t.map(|i| mesh.vertices[i]);
         a + 0.5 * (q - p).cross(&(r - p)).norm()
     });
-    if area >= 4.0 * unit * unit {
-        return Ok(());
-    }
     let dims = |k: f64, u: &str| {
         format!(
             "{} x {} x {} {u}",
@@ -298,6 +312,21 @@ fn check_units(spec: &str, mesh: &TargetMesh, unit: f64) -> Result<()> {
             number(size.z * k)
         )
     };
+    let units = area / (unit * unit);
+    if units > MAX_UNITS {
+        bail!(
+            "{spec}: the target's bounding box is {} and its area {} m^2: at {} mm it needs about {:.0} units, more than the {:.0} a build takes; raise secondary.unit_size (--unit-size) to at least {} mm, or check that the target is drawn in millimetres",
+            dims(1.0, "mm"),
+            number(area * 1e-6),
+            number(unit),
+            units,
+            MAX_UNITS,
+            (area / MAX_UNITS).sqrt().ceil()
+        );
+    }
+    if units >= 4.0 {
+        return Ok(());
+    }
     let mut hints = Vec::new();
     for (factor, name, flag) in [(1000.0, "metres", "m"), (25.4, "inches", "in")] {
         let area_mm = area * factor * factor;

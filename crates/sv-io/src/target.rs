@@ -27,6 +27,8 @@ pub struct TargetRepairs {
     /// OBJ vertices merged into another one at the same place (STL corners are always
     /// welded and not counted).
     pub welded: usize,
+    /// OBJ vertices no face uses (left out).
+    pub unused: usize,
     /// Triangles dropped because their corners coincide after welding.
     pub dropped: usize,
     /// Triangles turned to the orientation of their neighbours.
@@ -88,13 +90,24 @@ pub fn read_target(bytes: &[u8], name: &str) -> Result<TargetFile, IoError> {
         .collect();
     // STL always lists every triangle's own corners: welding them is reading it, not a
     // repair; an OBJ that repeats its vertices is a soup
-    let welded = if numbers.is_empty() {
-        0
+    let mut used = vec![false; plain.vertices.len()];
+    plain
+        .triangles
+        .iter()
+        .flatten()
+        .for_each(|&v| used[v] = true);
+    let used = used.iter().filter(|&&u| u).count();
+    let (welded, unused) = if numbers.is_empty() {
+        (0, 0)
     } else {
-        plain.vertices.len().saturating_sub(mesh.vertices.len())
+        (
+            used.saturating_sub(mesh.vertices.len()),
+            plain.vertices.len() - used,
+        )
     };
     let mut repairs = TargetRepairs {
         welded,
+        unused,
         dropped: dropped.len(),
         flipped: 0,
     };
@@ -313,6 +326,17 @@ mod tests {
             let [a, b, c] = tri.map(|i| t.mesh.vertices[i]);
             assert!((b - a).cross(&(c - a)).z > 0.0);
         }
+    }
+
+    #[test]
+    fn vertices_no_face_uses_are_left_out_not_welded() {
+        // the soup plus two vertices no face names, one of them far off
+        let text = format!("{}v 5 5 5\nv 1e7 0 0\n", soup_obj(true));
+        let t = read_target(text.as_bytes(), "soup.obj").unwrap();
+        assert_eq!(t.mesh.vertices.len(), 6);
+        assert_eq!((t.repairs.welded, t.repairs.unused), (12 - 6, 2));
+        let clean = read_target(soup_obj(true).as_bytes(), "soup.obj").unwrap();
+        assert_eq!(clean.repairs.unused, 0);
     }
 
     /// The error reading `text` as `t.obj`.
