@@ -524,6 +524,30 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
         "{}",
         given.stderr
     );
+    // at 45 degrees the spin is not a lever; at 70 it is named (the hubs lap most at 45)
+    assert!(!given.stderr.contains("spin angle"), "{}", given.stderr);
+    let spun = dir.run(
+        &[
+            &[
+                "build",
+                "--config",
+                "given.toml",
+                "--spin-angle",
+                "70",
+                "--out",
+                "spun",
+            ][..],
+            &args,
+        ]
+        .concat(),
+    );
+    spun.expect_code(3);
+    assert!(
+        spun.stderr
+            .contains("or a spin angle nearer 45 degrees (asked 70.000: the hubs lap most at 45)"),
+        "{}",
+        spun.stderr
+    );
     let report = read_json(&dir.join("given/report.json"));
     assert!(
         report["unmet"].as_array().unwrap().iter().any(|u| u

@@ -281,6 +281,61 @@ fn layout_flag_and_config_key_read_the_designers_layout() {
 }
 
 #[test]
+fn a_layout_that_cannot_be_used_is_named_by_its_own_file() {
+    let dir = Dir::new();
+    let (text, _) = layout_obj();
+    // two faces listing an edge the same way: the layout file is wrong, not the target
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let first_face = lines.iter().position(|l| l.starts_with("f ")).unwrap();
+    let f: Vec<&str> = lines[first_face].split_whitespace().collect();
+    lines[first_face] = format!("f {} {} {} {}", f[4], f[3], f[2], f[1]);
+    dir.write("flipped.obj", lines.join("\n") + "\n");
+    // the same layout drawn in metres: it does not lie on the target
+    let metres: String = text
+        .lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(xyz) => {
+                let m: Vec<String> = xyz
+                    .split_whitespace()
+                    .map(|c| (c.parse::<f64>().unwrap() / 1000.0).to_string())
+                    .collect();
+                format!("v {}\n", m.join(" "))
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    dir.write("metres.obj", metres);
+    let run = |layout: &str| {
+        let out = dir.run(&[
+            "build",
+            "--target",
+            "builtin:dome",
+            "--layout",
+            layout,
+            "--out",
+            "t",
+        ]);
+        out.expect_code(2);
+        out.one_error_line().to_string()
+    };
+    let flipped = run("flipped.obj");
+    assert!(
+        flipped.starts_with("error: flipped.obj: invalid layout: "),
+        "{flipped}"
+    );
+    let metres = run("metres.obj");
+    assert!(
+        metres.starts_with("error: metres.obj: the layout's bounding box is from (-2.000, -2.000")
+            && metres.contains("the target's from (-2000.000, -2000.000")
+            && metres.contains(
+                "its size is 9.96e-4 times the target's (layouts are read in millimetres"
+            ),
+        "{metres}"
+    );
+    assert!(!dir.join("t").exists());
+}
+
+#[test]
 fn a_layout_vertex_far_out_is_named() {
     // a finite but absurd coordinate used to reach the build and fail there as "initial
     // face 0 is flipped"; the layout reader refuses it as the target reader does

@@ -8,6 +8,7 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 use serde::Serialize;
 use sv_frame::Progress;
+use sv_geom::Point3;
 use sv_surface::{SecondaryReport, TargetMesh};
 
 use crate::cli::BuildArgs;
@@ -288,17 +289,59 @@ fn no_sheet_welds(
 /// that fits.
 const MAX_UNITS: f64 = 100_000.0;
 
+/// A designer's layout must be drawn where the target is, in the same unit: its bounding
+/// box within 5 times the target's size either way, its centre within the target's
+/// half-diagonal of the target's centre. Otherwise both boxes are named (a layout in
+/// metres laid onto a target in mm had come out as a degenerate face of the primary solve).
+fn layout_on_target(path: &Path, coarse: &sv_frame::QuadMesh, target: &TargetMesh) -> Result<()> {
+    let (tl, th) = bounding_box(&target.vertices);
+    let (ll, lh) = bounding_box(&coarse.vertices);
+    let (t_size, l_size) = ((th - tl).norm(), (lh - ll).norm());
+    let off = ((ll - tl) + (lh - th)).norm() / 2.0;
+    let why = if !(0.2 * t_size..=5.0 * t_size).contains(&l_size) {
+        format!(
+            "its size is {} times the target's (layouts are read in millimetres, as targets)",
+            number(l_size / t_size)
+        )
+    } else if off > 0.5 * t_size {
+        format!(
+            "its centre is {} mm from the target's: it does not lie on the target",
+            number(off)
+        )
+    } else {
+        return Ok(());
+    };
+    bail!(
+        "{}: the layout's bounding box is {}, the target's {}: {why}",
+        path.display(),
+        box_text(&coarse.vertices),
+        box_text(&target.vertices)
+    )
+}
+
+/// The axis-aligned bounding box of `points`: `(lower, upper)` corners.
+fn bounding_box(points: &[Point3]) -> (Point3, Point3) {
+    let first = points.first().copied().unwrap_or_else(Point3::origin);
+    points
+        .iter()
+        .fold((first, first), |(a, b), p| (a.inf(p), b.sup(p)))
+}
+
+/// A bounding box as the messages give it: `from (x, y, z) to (x, y, z) mm`.
+fn box_text(points: &[Point3]) -> String {
+    let (lo, hi) = bounding_box(points);
+    let p = |q: Point3| format!("({}, {}, {})", number(q.x), number(q.y), number(q.z));
+    format!("from {} to {} mm", p(lo), p(hi))
+}
+
 /// A target too small for 2 x 2 units is most often drawn in metres or inches: say so
 /// with its bounding box and what it would measure in those units. One that needs more
 /// than [`MAX_UNITS`] is refused with the unit size that would fit.
 fn check_units(spec: &str, mesh: &TargetMesh, unit: f64) -> Result<()> {
-    let Some(first) = mesh.vertices.first() else {
+    if mesh.vertices.is_empty() {
         return Ok(());
-    };
-    let (lo, hi) = mesh
-        .vertices
-        .iter()
-        .fold((*first, *first), |(a, b), p| (a.inf(p), b.sup(p)));
+    }
+    let (lo, hi) = bounding_box(&mesh.vertices);
     let size = hi - lo;
     let area = mesh.triangles.iter().fold(0.0, |a, t| {
         let [p, q, r] = t.map(|i| mesh.vertices[i]);
@@ -395,15 +438,27 @@ fn weldable(solved: &sv_frame::Solved, min_overlap: f64, cfg: &BuildConfig) -> R
     let l = &solved.links[worst];
     let deficit = min_overlap - lap;
     let shallower = deficit / (2.0 * 2f64.sqrt());
+    // the hubs lap most at 45 degrees (measured on the dome: the shortest lap -9.9 mm at
+    // 76 degrees, -16.7 at 78, -35.5 at 10, where 45 laps every link)
+    let spin = cfg.primary.spin_angle_deg;
+    let spin_lever = if (spin - 45.0).abs() > 2.0 {
+        format!(
+            ", or a spin angle nearer 45 degrees (asked {}: the hubs lap most at 45)",
+            number(spin)
+        )
+    } else {
+        String::new()
+    };
     bail!(
         "hub laps too short to weld: {short} of {} links below the minimum overlap {} mm, \
-         the shortest {} mm between units {} and {}; raise secondary.unit_size to about {:.0} mm, \
-         or make the hub lie {:.1} mm less deep in its tile ({}), or lower primary.min_overlap",
+         the shortest {} mm between the hubs of faces {} and {} (mesh.obj); raise \
+         secondary.unit_size to about {:.0} mm, or make the hub lie {:.1} mm less deep in its \
+         tile ({}){spin_lever}, or lower primary.min_overlap",
         overlaps.len(),
         number(min_overlap),
         number(lap),
-        l.faces[0],
-        l.faces[1],
+        l.faces[0] + 1,
+        l.faces[1] + 1,
         (cfg.secondary.unit_size + deficit / (2f64.sqrt() - 1.0)).ceil(),
         shallower,
         shallower_hub(&cfg.profile, shallower),
@@ -459,9 +514,12 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     let (mut cfg, mut options) = resolve(args)?;
     let target = load_target(&cfg.target, cfg.secondary.unit_size, args.quiet)?;
     let layout = cfg.surface.layout.as_deref().map(load_layout).transpose()?;
+    if let (Some(path), Some(coarse)) = (&cfg.surface.layout, &layout) {
+        layout_on_target(path, coarse, &target)?;
+    }
     let files = AtomicFiles::create(&cfg.out, &FILES)?;
-    let strips_dir = AtomicDir::create(&cfg.out, "strips")?;
-    let sheets_dir = AtomicDir::create(&cfg.out, "sheets")?;
+    let strips_dir = AtomicDir::create(&cfg.out, "strips", output::DRAWINGS)?;
+    let sheets_dir = AtomicDir::create(&cfg.out, "sheets", output::DRAWINGS)?;
 
     let t0 = Instant::now();
     let bar = progress_bar(args.quiet, cfg.secondary.max_iterations, "hub mesh");
@@ -476,7 +534,22 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         None => sv_surface::build_secondary(&target, &cfg.secondary, &mut tick),
     };
     bar.finish_and_clear();
-    let (mesh, mut report) = secondary.map_err(|e| anyhow!("{}: {e}", cfg.target))?;
+    let (mesh, mut report) = secondary.map_err(|e| match (&cfg.surface.layout, &layout) {
+        // the designer's layout is what is wrong: its file, not the target's
+        (Some(path), _) if matches!(e, sv_surface::SurfaceError::InvalidLayout(_)) => {
+            anyhow!("{}: {e}", path.display())
+        }
+        // a layout that does not lie on the target (another unit, another place) most
+        // often: both boxes side by side
+        (Some(path), Some(coarse)) => anyhow!(
+            "{} with the layout {}: {e} (the target's bounding box is {}, the layout's {})",
+            cfg.target,
+            path.display(),
+            box_text(&target.vertices),
+            box_text(&coarse.vertices)
+        ),
+        _ => anyhow!("{}: {e}", cfg.target),
+    })?;
     let secondary_s = t0.elapsed().as_secs_f64();
     // the hub mesh is ours: where its planarity goal is unmet the report says so, and the
     // primary solve still deploys it (hubs are best-fit rhombi) instead of refusing
@@ -724,7 +797,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
 /// `report.json`: the hub mesh against the target (the fields of `SecondaryReport`, at the
 /// top level as before) and, where the strips were cut, the fold check of the parts as cut
 /// (`spinvalence check DIR`'s rows).
-#[derive(serde::Serialize)]
+#[derive(Serialize)]
 struct ReportJson<'a> {
     #[serde(flatten)]
     hub_mesh: &'a SecondaryReport,

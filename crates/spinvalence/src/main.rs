@@ -135,18 +135,45 @@ fn clap_exit(err: clap::Error) -> ExitCode {
             ExitCode::from(EXIT_ERROR)
         }
         _ => {
-            let text = err.to_string();
-            let first = text.lines().next().unwrap_or("invalid arguments");
-            let first = first.strip_prefix("error: ").unwrap_or(first);
-            eprintln!("error: {first} (see --help)");
+            eprintln!("error: {} (see --help)", usage_error_line(&err.to_string()));
             ExitCode::from(EXIT_ERROR)
         }
+    }
+}
+
+/// clap's usage error as one line: its first paragraph (the message and what it lists,
+/// such as the missing arguments), without the usage that follows.
+fn usage_error_line(text: &str) -> String {
+    let lines: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.trim().is_empty() && !l.starts_with("Usage:"))
+        .map(str::trim)
+        .collect();
+    let line = lines.join(" ");
+    let line = line.strip_prefix("error: ").unwrap_or(&line);
+    if line.is_empty() {
+        "invalid arguments".into()
+    } else {
+        line.to_string()
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_usage_error_names_what_is_missing_on_one_line() {
+        let text = "error: the following required arguments were not provided:\n  --mesh <HUBS.obj>\n  --out <DIR>\n\nUsage: spinvalence solve --mesh <HUBS.obj> --out <DIR>\n\nFor more information, try '--help'.\n";
+        assert_eq!(
+            usage_error_line(text),
+            "the following required arguments were not provided: --mesh <HUBS.obj> --out <DIR>"
+        );
+        assert_eq!(
+            usage_error_line("error: unexpected argument '--foo' found\n\n  tip: to pass '--foo' as a value, use '-- --foo'\n"),
+            "unexpected argument '--foo' found"
+        );
+    }
 
     #[test]
     fn one_line_keeps_context_and_drops_repeated_causes() {

@@ -218,7 +218,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
         }
     }
     let files = AtomicFiles::create(&args.out, &["nest.json", "timings.json"])?;
-    let sheet_dir = AtomicDir::create(&args.out, "sheets")?;
+    let sheet_dir = AtomicDir::create(&args.out, "sheets", output::DRAWINGS)?;
     let options = NestOptions {
         sheets,
         margin: args.margin,

@@ -53,15 +53,23 @@ pub fn read_text(path: &Path) -> Result<String> {
 /// [`AtomicFiles::create`] makes one hidden temporary file per target up front (so an
 /// unwritable directory fails before any long computation); [`AtomicFiles::commit`] writes
 /// and syncs them all, then renames them into place, the last one last. Dropping an
-/// uncommitted set removes the temporary files.
+/// uncommitted set removes the temporary files, and the directories it created if they
+/// are empty: a build that fails leaves no trace.
 pub struct AtomicFiles {
     dir: PathBuf,
     pending: Vec<(NamedTempFile, PathBuf)>,
+    /// The outermost directory `create` made, if it made one.
+    created: Option<PathBuf>,
 }
 
 impl AtomicFiles {
     /// Create `dir` if needed and one temporary file in it for each of `names`.
     pub fn create(dir: &Path, names: &[&str]) -> Result<Self> {
+        let created = dir
+            .ancestors()
+            .take_while(|d| !d.as_os_str().is_empty() && fs::symlink_metadata(d).is_err())
+            .last()
+            .map(Path::to_path_buf);
         fs::create_dir_all(dir).map_err(|e| {
             anyhow!(
                 "cannot create output directory {}: {}",
@@ -92,13 +100,16 @@ impl AtomicFiles {
         Ok(Self {
             dir: dir.to_path_buf(),
             pending,
+            created,
         })
     }
 
     /// Write `contents[i]` to the `i`-th file and move all of them into place.
-    pub fn commit(self, contents: &[&str]) -> Result<Vec<PathBuf>> {
+    pub fn commit(mut self, contents: &[&str]) -> Result<Vec<PathBuf>> {
         assert_eq!(contents.len(), self.pending.len(), "one content per file");
-        let mut pending = self.pending;
+        // committed: whatever happens now, the directory stays
+        self.created = None;
+        let mut pending = std::mem::take(&mut self.pending);
         for ((temp, target), text) in pending.iter_mut().zip(contents) {
             let file = temp.as_file_mut();
             file.write_all(text.as_bytes())
@@ -123,17 +134,37 @@ impl AtomicFiles {
     }
 }
 
-/// A directory of files (`DIR/strips/`, `DIR/sheets/`) filled under a hidden temporary
+impl Drop for AtomicFiles {
+    fn drop(&mut self) {
+        self.pending.clear();
+        if let Some(top) = &self.created {
+            // from the innermost up to the outermost made; a directory not empty stays
+            for d in self.dir.ancestors() {
+                if fs::remove_dir(d).is_err() || d == top.as_path() {
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// A directory of drawings (`DIR/strips/`, `DIR/sheets/`) filled under a hidden temporary
 /// name beside its final place and swapped in by [`AtomicDir::commit`]: readers see the old
-/// directory or the new one, never a half-written mix. Dropped uncommitted, it vanishes.
+/// directory or the new one, never a half-written mix. The old directory's drawings (files
+/// with an extension this one writes) go with it, so that no drawing of an earlier build
+/// passes for one of this build; anything else in it (a CAM program, notes, a folder) is
+/// moved into the new one. Dropped uncommitted, it vanishes.
 pub struct AtomicDir {
     temp: tempfile::TempDir,
     target: PathBuf,
+    /// The extensions of its drawings (`dxf`, `svg`).
+    extensions: &'static [&'static str],
 }
 
 impl AtomicDir {
-    /// Create the temporary directory for `parent/name` (`parent` is created if needed).
-    pub fn create(parent: &Path, name: &str) -> Result<Self> {
+    /// Create the temporary directory for `parent/name` (`parent` is created if needed),
+    /// whose drawings are the files with one of `extensions`.
+    pub fn create(parent: &Path, name: &str, extensions: &'static [&'static str]) -> Result<Self> {
         fs::create_dir_all(parent).map_err(|e| {
             anyhow!(
                 "cannot create output directory {}: {}",
@@ -155,6 +186,7 @@ impl AtomicDir {
         Ok(Self {
             temp,
             target: parent.join(name),
+            extensions,
         })
     }
 
@@ -165,9 +197,15 @@ impl AtomicDir {
             .map_err(|e| anyhow!("{}: {}", self.target.join(file).display(), io_message(&e)))
     }
 
-    /// Replace `parent/name` (and everything that was in it) by the new directory.
+    /// Replace `parent/name` by the new directory: the old one's drawings are dropped, its
+    /// other entries kept (moved into the new one, unless it has an entry of that name;
+    /// where one cannot be moved, the old directory is kept and the error says where).
     pub fn commit(self) -> Result<PathBuf> {
-        let Self { temp, target } = self;
+        let Self {
+            temp,
+            target,
+            extensions,
+        } = self;
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;
@@ -205,11 +243,36 @@ impl AtomicDir {
             return Err(anyhow!("{}: {}", target.display(), io_message(&e)));
         }
         if let Some(old) = old {
+            let drawing = |path: &Path| {
+                path.is_file()
+                    && path
+                        .extension()
+                        .and_then(|e| e.to_str())
+                        .is_some_and(|ext| extensions.iter().any(|e| e.eq_ignore_ascii_case(ext)))
+            };
+            for entry in fs::read_dir(old.join("d")).into_iter().flatten().flatten() {
+                let (from, to) = (entry.path(), target.join(entry.file_name()));
+                if drawing(&from) || fs::symlink_metadata(&to).is_ok() {
+                    continue;
+                }
+                fs::rename(&from, &to).map_err(|e| {
+                    anyhow!(
+                        "{}: {} (the earlier {} is kept as {})",
+                        from.display(),
+                        io_message(&e),
+                        target.display(),
+                        old.join("d").display()
+                    )
+                })?;
+            }
             let _ = fs::remove_dir_all(old);
         }
         Ok(target)
     }
 }
+
+/// The files of the drawing directories (`strips/`, `sheets/`).
+pub const DRAWINGS: &[&str] = &["dxf", "svg"];
 
 /// Print to stdout; a closed pipe (`| head`) is not an error.
 pub fn print_out(text: &str) -> Result<()> {
@@ -328,12 +391,12 @@ mod tests {
     #[test]
     fn atomic_dir_replaces_the_old_directory_whole() {
         let dir = tempfile::tempdir().unwrap();
-        let first = AtomicDir::create(dir.path(), "strips").unwrap();
+        let first = AtomicDir::create(dir.path(), "strips", DRAWINGS).unwrap();
         first.write("A01.dxf", "one").unwrap();
         first.write("A02.dxf", "two").unwrap();
         let target = first.commit().unwrap();
         assert_eq!(fs::read_to_string(target.join("A02.dxf")).unwrap(), "two");
-        let second = AtomicDir::create(dir.path(), "strips").unwrap();
+        let second = AtomicDir::create(dir.path(), "strips", DRAWINGS).unwrap();
         second.write("A01.dxf", "new").unwrap();
         assert_eq!(
             fs::read_to_string(target.join("A01.dxf")).unwrap(),
@@ -349,7 +412,7 @@ mod tests {
         assert_eq!(fs::read_to_string(target.join("A01.dxf")).unwrap(), "new");
         let left: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(left.len(), 1, "no temporary directories left behind");
-        drop(AtomicDir::create(dir.path(), "sheets").unwrap());
+        drop(AtomicDir::create(dir.path(), "sheets", DRAWINGS).unwrap());
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
@@ -359,6 +422,48 @@ mod tests {
         let files = AtomicFiles::create(dir.path(), &["a.txt"]).unwrap();
         drop(files);
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+        // the directories it made go too (a failed build leaves no empty output folder);
+        // one that was there stays, and so does one that something else wrote into
+        let files = AtomicFiles::create(&dir.path().join("out/run"), &["a.txt"]).unwrap();
+        assert!(dir.path().join("out/run").is_dir());
+        drop(files);
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
+        let files = AtomicFiles::create(&dir.path().join("out"), &["a.txt"]).unwrap();
+        fs::write(dir.path().join("out/mine.txt"), "M").unwrap();
+        drop(files);
+        let left: Vec<_> = fs::read_dir(dir.path().join("out")).unwrap().collect();
+        assert_eq!(left.len(), 1);
+        // committed, the directory stays
+        let files = AtomicFiles::create(&dir.path().join("kept"), &["a.txt"]).unwrap();
+        files.commit(&["A"]).unwrap();
+        assert!(dir.path().join("kept/a.txt").is_file());
+    }
+
+    #[test]
+    fn atomic_dir_keeps_what_is_not_a_drawing() {
+        let dir = tempfile::tempdir().unwrap();
+        let first = AtomicDir::create(dir.path(), "sheets", DRAWINGS).unwrap();
+        first.write("sheet-01.dxf", "one").unwrap();
+        first.write("sheet-01.svg", "one").unwrap();
+        let target = first.commit().unwrap();
+        // the shop's own files beside the drawings: a CAM program, notes, a folder
+        fs::write(target.join("sheet-01.nc"), "G0 X0").unwrap();
+        fs::create_dir(target.join("mine")).unwrap();
+        fs::write(target.join("mine/notes.txt"), "N").unwrap();
+        let second = AtomicDir::create(dir.path(), "sheets", DRAWINGS).unwrap();
+        second.write("sheet-02.DXF", "two").unwrap();
+        second.commit().unwrap();
+        let mut names: Vec<_> = fs::read_dir(&target)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["mine", "sheet-01.nc", "sheet-02.DXF"]);
+        assert_eq!(
+            fs::read_to_string(target.join("mine/notes.txt")).unwrap(),
+            "N"
+        );
+        assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1, "no .old left");
     }
 
     #[test]
