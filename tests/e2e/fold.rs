@@ -524,7 +524,9 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
         "{}",
         given.stderr
     );
-    // at 45 degrees the spin is not a lever; at 70 it is named (the hubs lap most at 45)
+    // at 45 degrees the spin is not a lever; at 80 it is named (the hubs lap most at 45);
+    // (at 78 and 80 degrees the legs as cut used to stay 2-7e-6 mm off their lengths after
+    // the projection's 60 iterations, and the build stopped with exit 2)
     assert!(!given.stderr.contains("spin angle"), "{}", given.stderr);
     let spun = dir.run(
         &[
@@ -533,7 +535,7 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
                 "--config",
                 "given.toml",
                 "--spin-angle",
-                "70",
+                "80",
                 "--out",
                 "spun",
             ][..],
@@ -544,7 +546,7 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
     spun.expect_code(3);
     assert!(
         spun.stderr
-            .contains("or a spin angle nearer 45 degrees (asked 70.000: the hubs lap most at 45)"),
+            .contains("or a spin angle nearer 45 degrees (asked 80.000: the hubs lap most at 45)"),
         "{}",
         spun.stderr
     );
