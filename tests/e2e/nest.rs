@@ -165,6 +165,11 @@ fn bad_nest_input_is_one_line() {
             "--sheet \"-1x2\"",
         ),
         (vec!["a.dxf", "--margin", "-1"], "--margin"),
+        // a margin that leaves nothing of the sheet, refused before any part is read
+        (
+            vec!["a.dxf", "--margin", "760"],
+            "invalid --margin 760: leaves no usable area on the 3000 x 1500 mm sheet (2 x 760 mm >= 1500 mm)",
+        ),
         (vec!["a.dxf", "--nest-seconds", "0"], "--nest-seconds"),
         (vec!["garbage.dxf"], "nothing to nest"),
         (

@@ -133,6 +133,8 @@ pub fn run(args: &NestArgs) -> Result<()> {
         return run_strip(args, json[0]);
     }
     let sheets = parse_sheets(&args.sheet)?;
+    sv_nest::margin_leaves_room(&sheets, args.margin)
+        .map_err(|why| anyhow!("invalid --margin {}: {why}", args.margin))?;
     let read_options = read_options(args)?;
     let convention = convention(args)?;
     let mut parts: Vec<SheetPart> = Vec::new();
