@@ -254,3 +254,60 @@ fn parts_left_out_for_one_reason_are_one_line() {
     assert_eq!(report["left_out"].as_array().unwrap().len(), 6);
     assert!(report["sheets"].as_array().unwrap().is_empty());
 }
+
+/// What the reader skipped is in the error when nothing is left to nest: the first notes in
+/// the one line (they were counted, "1 notes on what was skipped", and shown nowhere), and
+/// an open contour that a skipped entity on its layer may have closed says so.
+#[test]
+fn nothing_to_nest_names_what_the_reader_skipped() {
+    let dir = Dir::new();
+    let header = "0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n";
+    let end = "0\nENDSEC\n0\nEOF\n";
+    // an INSERT of a block the file does not define
+    dir.write(
+        "missing_block.dxf",
+        format!("{header}0\nINSERT\n8\n0\n2\nNOPE\n10\n0\n20\n0\n30\n0\n{end}"),
+    );
+    // a SPLINE with zero weights (skipped) that closed the contour of a LINE
+    let mut spline = String::from(
+        "0\nSPLINE\n100\nAcDbEntity\n8\n0\n100\nAcDbSpline\n70\n8\n71\n3\n72\n8\n73\n4\n74\n0\n",
+    );
+    for w in [0, 0, 0, 0] {
+        spline += &format!("41\n{w}\n");
+    }
+    for k in [0, 0, 0, 0, 1, 1, 1, 1] {
+        spline += &format!("40\n{k}\n");
+    }
+    for (x, y) in [(0, 0), (100, -50), (200, 0), (200, 100)] {
+        spline += &format!("10\n{x}\n20\n{y}\n30\n0.0\n");
+    }
+    dir.write(
+        "spline_weights_zero.dxf",
+        format!("{header}{spline}0\nLINE\n8\n0\n10\n200\n20\n100\n30\n0.0\n11\n0\n21\n0\n31\n0.0\n{end}"),
+    );
+    for (file, needles) in [
+        (
+            "missing_block.dxf",
+            vec![
+                "no closed contours to cut (1 notes on what was skipped: ",
+                "block \"NOPE\" is not in the file: layer 0: INSERT #1)",
+            ],
+        ),
+        (
+            "spline_weights_zero.dxf",
+            vec![
+                "open contour: 2 loose ends",
+                "an entity skipped on its layer may have closed it (1 note: skipped: SPLINE",
+                "layer 0: SPLINE #1)",
+            ],
+        ),
+    ] {
+        let out = dir.run(&["nest", file, "--out", "o"]);
+        out.expect_code(2);
+        let line = out.one_error_line();
+        for needle in needles {
+            assert!(line.contains(needle), "{needle}: {line}");
+        }
+        assert!(!dir.join("o/nest.json").exists());
+    }
+}
