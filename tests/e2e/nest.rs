@@ -311,3 +311,37 @@ fn nothing_to_nest_names_what_the_reader_skipped() {
         assert!(!dir.join("o/nest.json").exists());
     }
 }
+
+/// A strip-packing instance that cannot be packed is one line and exit 2, before any work:
+/// an item higher than the strip in every allowed rotation panicked, a demand of 10^8 took
+/// 1.6 GB and panicked in jagua-rs.
+#[test]
+fn a_strip_instance_that_cannot_be_packed_is_one_line() {
+    let dir = Dir::new();
+    let inst = |height: f64, demand: u64| {
+        format!(
+            r#"{{"name": "t", "strip_height": {height}, "items": [{{"id": 3, "demand": {demand},
+            "orientation": {{"rotation": {{"mode": "stepped", "step": 180}}}},
+            "shape": {{"type": "simple_polygon", "data": [[0, 0], [3000, 0], [3000, 2260], [0, 2260]]}}}}]}}"#
+        )
+    };
+    dir.write("low.json", inst(1000.0, 2));
+    dir.write("many.json", inst(4900.0, 100_000_000));
+    dir.write("far.json", inst(4900.0, 20_000));
+    for (file, needle) in [
+        (
+            "low.json",
+            "low.json: instance: item 3 (2260 high at best, rotated by 0 degrees; rotations allowed: 0, 180 degrees) does not fit the strip height 1000",
+        ),
+        (
+            "many.json",
+            "100000000 item copies in all (item 3 demands 100000000): at most 100000",
+        ),
+        ("far.json", "where f32 coordinates are 8 apart"),
+    ] {
+        let out = dir.run(&["nest", file, "--nest-seconds", "1", "--out", "o"]);
+        out.expect_code(2);
+        assert!(out.one_error_line().contains(needle), "{needle}: {out:?}");
+        assert!(!dir.join("o/strip.json").exists());
+    }
+}
