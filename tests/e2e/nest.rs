@@ -165,6 +165,11 @@ fn bad_nest_input_is_one_line() {
             "--sheet \"-1x2\"",
         ),
         (vec!["a.dxf", "--margin", "-1"], "--margin"),
+        // a margin that leaves nothing of the sheet, refused before any part is read
+        (
+            vec!["a.dxf", "--margin", "760"],
+            "invalid --margin 760: leaves no usable area on the 3000 x 1500 mm sheet (2 x 760 mm >= 1500 mm)",
+        ),
         (vec!["a.dxf", "--nest-seconds", "0"], "--nest-seconds"),
         (vec!["garbage.dxf"], "nothing to nest"),
         (
@@ -248,4 +253,95 @@ fn parts_left_out_for_one_reason_are_one_line() {
     let report = read_json(&dir.join("m/nest.json"));
     assert_eq!(report["left_out"].as_array().unwrap().len(), 6);
     assert!(report["sheets"].as_array().unwrap().is_empty());
+}
+
+/// What the reader skipped is in the error when nothing is left to nest: the first notes in
+/// the one line (they were counted, "1 notes on what was skipped", and shown nowhere), and
+/// an open contour that a skipped entity on its layer may have closed says so.
+#[test]
+fn nothing_to_nest_names_what_the_reader_skipped() {
+    let dir = Dir::new();
+    let header = "0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n";
+    let end = "0\nENDSEC\n0\nEOF\n";
+    // an INSERT of a block the file does not define
+    dir.write(
+        "missing_block.dxf",
+        format!("{header}0\nINSERT\n8\n0\n2\nNOPE\n10\n0\n20\n0\n30\n0\n{end}"),
+    );
+    // a SPLINE with zero weights (skipped) that closed the contour of a LINE
+    let mut spline = String::from(
+        "0\nSPLINE\n100\nAcDbEntity\n8\n0\n100\nAcDbSpline\n70\n8\n71\n3\n72\n8\n73\n4\n74\n0\n",
+    );
+    for w in [0, 0, 0, 0] {
+        spline += &format!("41\n{w}\n");
+    }
+    for k in [0, 0, 0, 0, 1, 1, 1, 1] {
+        spline += &format!("40\n{k}\n");
+    }
+    for (x, y) in [(0, 0), (100, -50), (200, 0), (200, 100)] {
+        spline += &format!("10\n{x}\n20\n{y}\n30\n0.0\n");
+    }
+    dir.write(
+        "spline_weights_zero.dxf",
+        format!("{header}{spline}0\nLINE\n8\n0\n10\n200\n20\n100\n30\n0.0\n11\n0\n21\n0\n31\n0.0\n{end}"),
+    );
+    for (file, needles) in [
+        (
+            "missing_block.dxf",
+            vec![
+                "no closed contours to cut (1 notes on what was skipped: ",
+                "block \"NOPE\" is not in the file: layer 0: INSERT #1)",
+            ],
+        ),
+        (
+            "spline_weights_zero.dxf",
+            vec![
+                "open contour: 2 loose ends",
+                "an entity skipped on its layer may have closed it (1 note: skipped: SPLINE",
+                "layer 0: SPLINE #1)",
+            ],
+        ),
+    ] {
+        let out = dir.run(&["nest", file, "--out", "o"]);
+        out.expect_code(2);
+        let line = out.one_error_line();
+        for needle in needles {
+            assert!(line.contains(needle), "{needle}: {line}");
+        }
+        assert!(!dir.join("o/nest.json").exists());
+    }
+}
+
+/// A strip-packing instance that cannot be packed is one line and exit 2, before any work:
+/// an item higher than the strip in every allowed rotation panicked, a demand of 10^8 took
+/// 1.6 GB and panicked in jagua-rs.
+#[test]
+fn a_strip_instance_that_cannot_be_packed_is_one_line() {
+    let dir = Dir::new();
+    let inst = |height: f64, demand: u64| {
+        format!(
+            r#"{{"name": "t", "strip_height": {height}, "items": [{{"id": 3, "demand": {demand},
+            "orientation": {{"rotation": {{"mode": "stepped", "step": 180}}}},
+            "shape": {{"type": "simple_polygon", "data": [[0, 0], [3000, 0], [3000, 2260], [0, 2260]]}}}}]}}"#
+        )
+    };
+    dir.write("low.json", inst(1000.0, 2));
+    dir.write("many.json", inst(4900.0, 100_000_000));
+    dir.write("far.json", inst(4900.0, 20_000));
+    for (file, needle) in [
+        (
+            "low.json",
+            "low.json: instance: item 3 (2260 high at best, rotated by 0 degrees; rotations allowed: 0, 180 degrees) does not fit the strip height 1000",
+        ),
+        (
+            "many.json",
+            "100000000 item copies in all (item 3 demands 100000000): at most 100000",
+        ),
+        ("far.json", "where f32 coordinates are 8 apart"),
+    ] {
+        let out = dir.run(&["nest", file, "--nest-seconds", "1", "--out", "o"]);
+        out.expect_code(2);
+        assert!(out.one_error_line().contains(needle), "{needle}: {out:?}");
+        assert!(!dir.join("o/strip.json").exists());
+    }
 }

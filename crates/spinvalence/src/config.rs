@@ -152,6 +152,8 @@ impl NestConfig {
                 bail!("invalid nest.{key} {v}: must be a finite length >= 0 mm");
             }
         }
+        sv_nest::margin_leaves_room(&sheets, self.margin)
+            .map_err(|why| anyhow!("invalid nest.margin {}: {why}", self.margin))?;
         if !(self.seconds.is_finite() && self.seconds > 0.0 && self.seconds <= 86_400.0) {
             bail!(
                 "invalid nest.seconds {}: must be > 0 and at most a day",

@@ -133,6 +133,8 @@ pub fn run(args: &NestArgs) -> Result<()> {
         return run_strip(args, json[0]);
     }
     let sheets = parse_sheets(&args.sheet)?;
+    sv_nest::margin_leaves_room(&sheets, args.margin)
+        .map_err(|why| anyhow!("invalid --margin {}: {why}", args.margin))?;
     let read_options = read_options(args)?;
     let convention = convention(args)?;
     let mut parts: Vec<SheetPart> = Vec::new();
@@ -306,6 +308,16 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
         ));
     });
     bar.finish_and_clear();
+    if result.items_in_columns > 0 {
+        eprintln!(
+            "warning: strip packing: the {} s time cap cut the construction: {} of {} items \
+             went in columns of their bounding boxes, without a search (--nest-seconds for more \
+             time)",
+            args.nest_seconds,
+            result.items_in_columns,
+            result.placements.len()
+        );
+    }
     if result.cut_by_time {
         eprintln!(
             "warning: strip packing: the {} s time cap cut the search short of its work \
@@ -315,7 +327,7 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
     }
     files.commit(&[&serde_json::to_string_pretty(&result)?])?;
     if !args.quiet {
-        let rows = vec![
+        let mut rows = vec![
             vec!["instance".into(), result.name.clone()],
             vec![
                 "strip".into(),
@@ -323,6 +335,17 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
             ],
             vec!["density".into(), format!("{:.2} %", 100.0 * result.density)],
             vec!["items".into(), result.placements.len().to_string()],
+        ];
+        if result.items_in_columns > 0 {
+            rows.push(vec![
+                "construction".into(),
+                format!(
+                    "cut by the {} s cap: {} items in columns",
+                    args.nest_seconds, result.items_in_columns
+                ),
+            ]);
+        }
+        rows.extend([
             vec![
                 "search".into(),
                 crate::sheets::search_row(
@@ -333,7 +356,7 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
                 ),
             ],
             vec!["time".into(), format!("{:.1} s", result.elapsed_s)],
-        ];
+        ]);
         output::print_out(&output::table(&rows))?;
     }
     Ok(())

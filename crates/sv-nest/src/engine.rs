@@ -80,6 +80,14 @@ impl Budget {
     pub fn elapsed(&self) -> Duration {
         self.start.elapsed()
     }
+    /// Whether the clock passed `at` (from the start): a cut, when there is a work budget.
+    pub fn clock_passed(&self, at: Duration) -> bool {
+        let passed = self.start.elapsed() >= at;
+        if passed && self.work.is_some() {
+            self.cut.set(true);
+        }
+        passed
+    }
     /// Share of the budget used, 0..1: of the work budget when there is one (never of the
     /// clock, which would make the phases depend on the machine), else of the time.
     pub fn fraction(&self) -> f32 {

@@ -18,8 +18,9 @@ pub mod strip;
 
 pub use part::{ById, Contour, Part, Vertex, DEFAULT_FLATTEN_TOLERANCE};
 pub use sheets::{
-    lower_bounds, nest_sheets, sheet_work_budget, LeftOut, LowerBounds, NestOptions, NestReport,
-    Offcut, PartPlacement, RotationMode, SearchReport, SheetReport, SheetSpec, StockSheet,
+    lower_bounds, margin_leaves_room, nest_sheets, sheet_work_budget, LeftOut, LowerBounds,
+    NestOptions, NestReport, Offcut, PartPlacement, RotationMode, SearchReport, SheetReport,
+    SheetSpec, StockSheet,
 };
 pub use strip::{
     nest_strip, strip_work_budget, Progress, StripInstance, StripOptions, StripPlacement,

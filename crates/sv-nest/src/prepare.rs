@@ -305,10 +305,18 @@ fn make_kind(p: &Polyline<f64>, kind: usize, setup: &Setup) -> Result<Kind, Stri
         .map(|e| ([e.min_x, e.min_y], [e.max_x, e.max_y]))
         .unwrap_or(([0.0; 2], [0.0; 2]));
     let s = 2.0 * setup.half_spacing;
+    // what it was compared with: each stock size inside its margins, with spacing too
+    let usable: Vec<String> = setup
+        .usable
+        .iter()
+        .map(|u| format!("{:.1} x {:.1}", u.2 - u.0, u.3 - u.1))
+        .collect();
     Err(format!(
-        "larger than every sheet ({:.1} x {:.1} mm with spacing)",
+        "larger than every sheet ({:.1} x {:.1} mm with spacing; usable inside the margins, \
+         with spacing: {} mm)",
         ohi[0] - olo[0] + s,
-        ohi[1] - olo[1] + s
+        ohi[1] - olo[1] + s,
+        usable.join(", ")
     ))
 }
 

@@ -351,6 +351,12 @@ pub fn nest_sheets(
             "margin and spacing must be >= 0, flatten tolerance > 0".into(),
         ));
     }
+    if let Err(why) = margin_leaves_room(&opts.sheets, opts.margin) {
+        return Err(NestError::Options(format!(
+            "margin {} mm {why}",
+            opts.margin
+        )));
+    }
     // the clock starts here: the set-up is part of the budget
     let started = Instant::now();
     let (m, s) = (opts.margin, opts.spacing);
@@ -699,6 +705,23 @@ fn last_x(bins: &[Sheet]) -> f32 {
 /// Sheets a part's failure closes: after this many parts in a row that did not fit, a sheet
 /// is full (the remaining, smaller parts go on the next ones; the search repacks the end).
 const FAILURES_TO_CLOSE: usize = 12;
+
+/// Whether `margin` (mm) along every edge leaves room on each stock size: `Err` with the
+/// reason (`leaves no usable area on the 3000 x 1500 mm sheet (2 x 760 mm >= 1500 mm)`)
+/// where twice the margin reaches the sheet's width or height. Callers name their flag or
+/// key before it; [`nest_sheets`] refuses such options up front.
+pub fn margin_leaves_room(sheets: &[StockSheet], margin: f64) -> Result<(), String> {
+    for st in sheets {
+        let side = st.width.min(st.height);
+        if 2.0 * margin >= side {
+            return Err(format!(
+                "leaves no usable area on the {} x {} mm sheet (2 x {margin} mm >= {side} mm)",
+                st.width, st.height
+            ));
+        }
+    }
+    Ok(())
+}
 
 /// Share of [`NestOptions::time_limit`] the construction may take: the parts it has not
 /// placed by then go in rows of bounding boxes ([`in_rows`]), so that the stage holds its

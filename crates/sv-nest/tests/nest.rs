@@ -668,3 +668,39 @@ fn the_budget_time_not_the_clock_decides_the_work() {
         long.search.work_budget
     );
 }
+
+#[test]
+fn a_margin_that_leaves_no_room_is_refused_and_too_large_names_the_usable_size() {
+    // 600 x 400 sheet: a 200 mm margin leaves nothing of its height; before, every part
+    // was left out as "larger than every sheet"
+    let parts = test_parts();
+    let opts = NestOptions {
+        margin: 200.0,
+        ..small_opts()
+    };
+    let e = nest_sheets(&parts, &opts, &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "invalid options: margin 200 mm leaves no usable area on the 600 x 400 mm sheet \
+         (2 x 200 mm >= 400 mm)"
+    );
+    assert!(sv_nest::margin_leaves_room(&opts.sheets, 199.0).is_ok());
+    // a part too large: the reason gives the size it was compared with (580 x 380 inside
+    // the 10 mm margins, 586 x 386 with the 6 mm spacing)
+    let opts = NestOptions {
+        spacing: 6.0,
+        ..small_opts()
+    };
+    let big = vec![Part::new(
+        "big",
+        Contour::polygon(&[[0.0, 0.0], [700.0, 0.0], [700.0, 50.0], [0.0, 50.0]]),
+    )];
+    let report = nest_sheets(&big, &opts, &mut |_| {}).unwrap();
+    assert_eq!(
+        report.left_out[0].reason,
+        "larger than every sheet (706.0 x 56.0 mm with spacing; usable inside the margins, \
+         with spacing: 586.0 x 386.0 mm)"
+    );
+}

@@ -149,6 +149,28 @@ fn entity_list(entities: &[EntityRef]) -> String {
     s
 }
 
+/// Notes shown in one line: `: what: layer 0: INSERT #1 / what 2: ...` (without the file,
+/// which the line names), at most [`NOTES_NAMED`], then how many more (`nest.json` lists
+/// every one); empty without notes.
+fn first_notes(notes: &[Note]) -> String {
+    if notes.is_empty() {
+        return String::new();
+    }
+    let named: Vec<String> = notes
+        .iter()
+        .take(NOTES_NAMED)
+        .map(|n| format!("{}{}", n.what, entity_list(&n.entities)))
+        .collect();
+    let mut s = format!(": {}", named.join(" / "));
+    if notes.len() > NOTES_NAMED {
+        s.push_str(&format!(" / and {} more", notes.len() - NOTES_NAMED));
+    }
+    s
+}
+
+/// Notes named in a one-line error (the rest counted).
+const NOTES_NAMED: usize = 2;
+
 /// What a file gave: parts, contours left out, notes.
 #[derive(Clone, Debug, Default)]
 pub struct DxfParts {
@@ -407,9 +429,47 @@ pub fn read_dxf(bytes: &[u8], name: &str, options: &ReadOptions) -> Result<DxfPa
             .to_string(),
         reason,
     };
+    // an entity skipped on the layer of an open contour may be what closed it (a SPLINE
+    // that could not be read): the reason says so
+    let skipped_on = |srcs: &[usize]| -> String {
+        let layers: Vec<&str> = srcs
+            .iter()
+            .map(|&s| got.sources[s].layer.as_str())
+            .collect();
+        let near: Vec<Note> = got
+            .skipped
+            .iter()
+            .filter(|((layer, _, _), _)| layers.contains(&layer.as_str()))
+            .map(|((layer, entity, why), handles)| Note {
+                file: name.to_string(),
+                what: format!("skipped: {why}"),
+                entities: handles
+                    .iter()
+                    .map(|h| EntityRef {
+                        layer: layer.clone(),
+                        entity: entity.to_string(),
+                        handle: h.clone(),
+                    })
+                    .collect(),
+            })
+            .collect();
+        if near.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; an entity skipped on its layer may have closed it ({} note{}{})",
+                near.len(),
+                if near.len() == 1 { "" } else { "s" },
+                first_notes(&near)
+            )
+        }
+    };
     let mut rejected: Vec<DxfError> = open
         .into_iter()
-        .map(|(srcs, reason)| bad(&srcs, reason))
+        .map(|(srcs, reason)| {
+            let why = skipped_on(&srcs);
+            bad(&srcs, reason + &why)
+        })
         .collect();
     let cands = parts::candidates(got.closed, chains.contours);
     let mut found = parts::classify(cands, &got.texts, options.join_tolerance, options.islands);
@@ -423,8 +483,9 @@ pub fn read_dxf(bytes: &[u8], name: &str, options: &ReadOptions) -> Result<DxfPa
         rejected.push(DxfError::Dxf {
             file: name.to_string(),
             message: format!(
-                "no closed contours to cut ({} notes on what was skipped)",
-                notes.len()
+                "no closed contours to cut ({} notes on what was skipped{})",
+                notes.len(),
+                first_notes(&notes)
             ),
         });
     }
