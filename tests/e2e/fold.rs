@@ -143,6 +143,10 @@ fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
             "hub_stack_gap_max",
         ),
         (
+            "hub plates at a lap, closest gap between them",
+            "hub_stack_closest_max",
+        ),
+        (
             "leg through the neighbour's hub plate, outside its relief",
             "leg_through_hub_plate_max",
         ),

@@ -1077,6 +1077,7 @@ def main(argv=None):
     one_lap_fail = []
     stack_lift = (0.0, None)  # hub plates at a lap: how far from one lying on the other
     stack_gap = (0.0, None)   # ... and the widest gap between them over the lap
+    stack_closest = (0.0, None)   # ... and the closest they come over it
     stack_fail = []
     leg_through = (0.0, None)  # a leg's centre line into the neighbour's hub plate at a lap
     legs_through = 0
@@ -1117,6 +1118,9 @@ def main(argv=None):
             widest = hi - thickness if lo >= thickness else (-lo - thickness if hi <= -thickness else hi - lo)
             if stack_gap[1] is None or widest > stack_gap[0]:
                 stack_gap = (widest, where)
+            closest = lo - thickness if lo >= thickness else (-hi - thickness if hi <= -thickness else 0.0)
+            if stack_closest[1] is None or closest > stack_closest[0]:
+                stack_closest = (closest, where)
         # each leg leaves its hub at a corner, where the neighbour's hub plate laps: the
         # leg as a plate, its section through that plate, against the plate's steel (the
         # relief cut for it excepted)
@@ -1290,6 +1294,8 @@ def main(argv=None):
              (" (" + ", ".join(through_links[:5]) + ")") if through_links else ""))
     print("info: hub plates at their laps: widest gap between the two over a lap %.3f mm (%s)"
           % (stack_gap[0], stack_gap[1]))
+    print("info: hub plates at their laps: closest gap between the two over a lap, largest %.3f mm (%s)"
+          % (stack_closest[0], stack_closest[1]))
     print("legs through a neighbour's hub plate outside its relief: %d, deepest %.3g mm (%s)"
           % (legs_through, leg_through[0], leg_through[1]))
     print("info: reliefs under the hub plate lying on theirs at a lap: deepest %.3g mm (%s)"
@@ -1371,6 +1377,7 @@ def main(argv=None):
             "bridge_reach_max": rim_reach[0],
             "hub_stack_lift_max": stack_lift[0],
             "hub_stack_gap_max": stack_gap[0],
+            "hub_stack_closest_max": stack_closest[0],
             "legs_through_hub_plates": legs_through,
             "leg_through_hub_plate_max": leg_through[0],
             "relief_under_upper_max": under_upper[0],

@@ -288,6 +288,14 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         "hub plates at a lap, widest gap between them (mm; not held)",
         Real::INFINITY,
     );
+    // and the nearest they come: where it is more than a weld bridges (the weld gap
+    // limit), the two plates touch nowhere over the lap, and welding it needs them pressed
+    // together or a filler
+    let mut apart = Worst::max(
+        "hub plates at a lap, closest gap between them (mm; not held)",
+        Real::INFINITY,
+    );
+    let (mut laps_apart, mut laps_seen) = (0, 0);
     // each leg leaves its hub at a corner, and a corner is where the neighbour's hub plate
     // laps: at every lap one leg runs down through the lower plate, through the relief cut
     // for it (docs/geometry.md 5.5); the leg as a plate, its section through the plate,
@@ -332,9 +340,12 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
                 under_upper.see(*under, at);
             }
         }
-        if let Some((into, widest)) = m.stacking {
+        if let Some((into, widest, closest)) = m.stacking {
             through.see(into, at);
             stacked.see(widest, at);
+            apart.see(closest, at);
+            laps_seen += 1;
+            laps_apart += usize::from(closest > limits.weld_gap);
         }
         match m.weld {
             None => rims.see(m.depth, at),
@@ -433,6 +444,12 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         ])
         .map(Worst::row)
         .collect();
+    let mut row = apart.row();
+    row.at = format!(
+        "{}; {laps_apart} of {laps_seen} laps more than {} mm apart everywhere",
+        row.at, limits.weld_gap
+    );
+    rows.push(row);
     // the two rows of legs say how many legs are over the limit, not only the deepest
     for legs in [legs_through, legs_rims] {
         let over = legs.outside();
@@ -458,7 +475,7 @@ struct AtLink {
     legs_through: [(Vec<Real>, Option<Real>); 2],
     /// How far the two hub plates are from lying one on the other, and the widest gap
     /// between them over the lap.
-    stacking: Option<(Real, Real)>,
+    stacking: Option<(Real, Real, Real)>,
     /// How deep one facing primary plate reaches into the other.
     depth: Real,
     /// Between strips: the gap at the weld point; `None` across a bridge's joint slot.
@@ -493,17 +510,17 @@ fn measure_link(
     });
     let stacking = lap_heights(&fa.placed.hub_plate, &fb.placed.hub_plate).map(|(low, high)| {
         // how far the two slabs are from lying one on the other (0 when one does), and the
-        // widest gap between them over the lap
+        // widest and the closest gap between them over the lap
         let into = (thickness - low).min(high + thickness).max(0.0);
-        let widest = if low >= thickness {
-            high - thickness
+        let (widest, closest) = if low >= thickness {
+            (high - thickness, low - thickness)
         } else if high <= -thickness {
-            -low - thickness
+            (-low - thickness, -high - thickness)
         } else {
             // once stacked, touching at one end: the wedge
-            high - low
+            (high - low, 0.0)
         };
-        (into, widest)
+        (into, widest, closest)
     });
     // the plates as cut (shortened at their ends where a bridge joins): no facing side
     // reaches into the other plate, between strips nor across a bridge's joint slot
