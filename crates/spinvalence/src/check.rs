@@ -27,6 +27,9 @@ pub fn run(args: &CheckArgs) -> Result<bool> {
             );
         }
         let mut strips = read_strips(&strips_json)?;
+        strips
+            .validate(frame.units.len())
+            .map_err(|e| anyhow!("{}: {e}", strips_json.display()))?;
         for note in cuts_from_dxf(dir, &mut strips)? {
             eprintln!("note: {note}");
         }
