@@ -168,3 +168,20 @@ fn a_face_without_exactly_one_unit_fails_and_is_named() {
         "{out:?}"
     );
 }
+
+/// `--min-overlap=-5` passed hub plates that miss each other by up to 5 mm as welds.
+#[test]
+fn a_weld_minimum_at_or_below_zero_is_refused() {
+    let dir = solved();
+    for bad in ["-5", "0", "nan"] {
+        let out = dir.run(&["check", "out/frame.json", &format!("--min-overlap={bad}")]);
+        out.expect_code(2);
+        assert!(
+            out.one_error_line().contains("--min-overlap")
+                && out.one_error_line().contains("must be a length > 0"),
+            "{out:?}"
+        );
+    }
+    dir.run(&["check", "out/frame.json", "--min-overlap=25"])
+        .expect_code(0);
+}
