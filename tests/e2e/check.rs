@@ -131,3 +131,57 @@ fn missing_and_binary_files_are_unreadable_input() {
     out.expect_code(2);
     assert!(out.one_error_line().contains("binary.json"), "{out:?}");
 }
+
+/// A frame that lost its units and links, or got a unit twice, passed with every row ok:
+/// each face must be one unit with its own id (what `serve` refuses).
+#[test]
+fn a_face_without_exactly_one_unit_fails_and_is_named() {
+    let dir = solved();
+    rewrite(&dir, |frame| {
+        frame["units"] = Value::Array(Vec::new());
+        frame["links"] = Value::Array(Vec::new());
+    });
+    let out = dir.run(&["check", "out/frame.json"]);
+    out.expect_code(1);
+    let line = out.one_error_line();
+    assert!(line.contains("the frame has no units"), "{out:?}");
+
+    let dir = solved();
+    let mut id = String::new();
+    rewrite(&dir, |frame| {
+        let units = frame["units"].as_array_mut().unwrap();
+        id = units[0]["id"].as_str().unwrap().to_string();
+        let first = units[0].clone();
+        units.push(first);
+    });
+    let out = dir.run(&["check", "out/frame.json"]);
+    out.expect_code(1);
+    let line = out.one_error_line();
+    assert!(
+        line.contains(&format!("face 0 has 2 units ({id}, {id})")),
+        "{out:?}"
+    );
+    assert!(
+        out.stdout
+            .lines()
+            .any(|l| l.starts_with("faces without exactly one unit") && l.ends_with("FAIL")),
+        "{out:?}"
+    );
+}
+
+/// `--min-overlap=-5` passed hub plates that miss each other by up to 5 mm as welds.
+#[test]
+fn a_weld_minimum_at_or_below_zero_is_refused() {
+    let dir = solved();
+    for bad in ["-5", "0", "nan"] {
+        let out = dir.run(&["check", "out/frame.json", &format!("--min-overlap={bad}")]);
+        out.expect_code(2);
+        assert!(
+            out.one_error_line().contains("--min-overlap")
+                && out.one_error_line().contains("must be a length > 0"),
+            "{out:?}"
+        );
+    }
+    dir.run(&["check", "out/frame.json", "--min-overlap=25"])
+        .expect_code(0);
+}

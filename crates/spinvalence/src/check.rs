@@ -13,6 +13,12 @@ use crate::output::{self, number};
 /// Run `check`; `Ok(true)` when every check passes. The readers check the headers
 /// (`format`, `version`, `length_unit`), shapes, finiteness and indices.
 pub fn run(args: &CheckArgs) -> Result<bool> {
+    if let Some(m) = args.min_overlap {
+        // a weld minimum at or below 0 would pass hub plates that do not lap
+        if !(m.is_finite() && m > 0.0) {
+            bail!("invalid --min-overlap {m}: must be a length > 0 in mm");
+        }
+    }
     let (name, report) = if args.frame.is_dir() {
         let dir = &args.frame;
         let frame = read_frame(&dir.join("frame.json"))?;
@@ -27,14 +33,14 @@ pub fn run(args: &CheckArgs) -> Result<bool> {
             );
         }
         let mut strips = read_strips(&strips_json)?;
+        strips
+            .validate(frame.units.len())
+            .map_err(|e| anyhow!("{}: {e}", strips_json.display()))?;
         for note in cuts_from_dxf(dir, &mut strips)? {
             eprintln!("note: {note}");
         }
         let mut limits = FoldLimits::for_profile(&strips.params.profile);
         if let Some(m) = args.min_overlap {
-            if !m.is_finite() {
-                bail!("invalid --min-overlap {m}: must be a finite length in mm");
-            }
             limits.min_overlap = m;
         }
         (

@@ -343,8 +343,8 @@ pub struct CheckArgs {
     /// build` (its frame.json and strips.json).
     #[arg(value_name = "FRAME.json|DIR")]
     pub frame: PathBuf,
-    /// Shortest hub lap a build directory must show (mm). Default: max(5 t, 25 mm) for the
-    /// sheet thickness t of its strips.json.
+    /// Shortest hub lap a build directory must show (mm, above 0). Default: max(5 t, 25 mm)
+    /// for the sheet thickness t of its strips.json.
     #[arg(long, value_name = "MM")]
     pub min_overlap: Option<f64>,
 }

@@ -118,8 +118,9 @@ pub fn config(args: &ServeArgs) -> Result<ServeConfig> {
     let name = args.frame.display().to_string();
     let text = output::read_text(&args.frame)?;
     let frame = sv_io::frame_from_json(&text, &name)?;
-    if frame.units.is_empty() {
-        bail!("{name}: the frame has no units");
+    // each face one unit with its own id: the rule `spinvalence check` holds
+    if let Some(problem) = frame.unit_problems().first() {
+        bail!("{name}: {problem}");
     }
     let mut config = ServeConfig::new(frame);
     config.bind = args.bind.clone();

@@ -143,16 +143,21 @@ impl Worst {
         self.outside
     }
 
-    /// The row: the worst value (none seen: 0, or infinity for an at-least check, at `-`).
+    /// The row: the worst value (none seen: 0 at `-`, or for an at-least check infinity at
+    /// `nothing measured`). A held row (finite limit) whose worst is not finite fails: an
+    /// at-least check that measured nothing has not shown its values reach the limit.
     pub fn row(self) -> CheckRow {
-        let (worst, at) = self
-            .worst
-            .unwrap_or((if self.at_least { Real::INFINITY } else { 0.0 }, "-".into()));
-        let ok = if self.at_least {
+        let (worst, at) = self.worst.unwrap_or(if self.at_least {
+            (Real::INFINITY, "nothing measured".into())
+        } else {
+            (0.0, "-".into())
+        });
+        let within = if self.at_least {
             worst >= self.limit
         } else {
             worst <= self.limit
         };
+        let ok = within && (worst.is_finite() || self.limit.is_infinite());
         CheckRow {
             name: self.name.into(),
             worst,
@@ -249,6 +254,17 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
     let cut = frame.params.cut;
     let mut pinned = Worst::max("leg pin to pin = its length as cut (mm)", abs);
     let mut pins_match = Worst::max("pins match the cut of the tile (mm)", abs);
+    // model.md 1: each face is one unit; each unit its own label (the streamer's rule too)
+    let mut units_on_faces = Worst::max("faces without exactly one unit, ids used twice", 0.0);
+    let problems = frame.unit_problems();
+    units_on_faces.see(problems.len() as Real, || {
+        problems
+            .first()
+            .map_or("-".into(), |p| match problems.len() {
+                1 => p.to_string(),
+                n => format!("{p} (and {} more)", n - 1),
+            })
+    });
 
     let e = frame.params.expansion;
     let mut expanded: Vec<Option<[Point3; 4]>> = Vec::with_capacity(frame.units.len());
@@ -434,7 +450,7 @@ pub fn check_frame(frame: &FrameFile, options: &CheckOptions) -> CheckReport {
         Some(_) => [pinned, pins_match, rhombic],
         None => [legs, rhombic, axis],
     };
-    let rows = [congruent, orientation]
+    let rows = [units_on_faces, congruent, orientation]
         .into_iter()
         .chain(kinematics)
         .chain(cut.is_none().then_some(params))
@@ -518,7 +534,7 @@ fn check_joints(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{solve, SolveOptions};
+    use crate::{solve, SolveOptions, UnitProblem};
 
     /// A row keeps its worst value and where it was, a NaN once seen, and compares with its
     /// limit in its own sense; with nothing seen it holds.
@@ -547,7 +563,16 @@ mod tests {
             (none_max.worst, none_max.at.as_str(), none_max.ok),
             (0.0, "-", true)
         );
-        assert!(none_min.worst.is_infinite() && none_min.ok);
+        // a lap row that measured no lap has not shown a lap reaches the minimum
+        assert!(none_min.worst.is_infinite() && !none_min.ok, "{none_min:?}");
+        assert_eq!(none_min.at, "nothing measured");
+        let mut inf = Worst::min("inf", 1.0);
+        inf.see(Real::INFINITY, || "a".into());
+        assert!(!inf.row().ok);
+        // a row without a limit informs, whatever it saw
+        let mut info = Worst::max("info", Real::INFINITY);
+        info.see(Real::INFINITY, || "a".into());
+        assert!(info.row().ok);
     }
 
     fn solved_cap() -> FrameFile {
@@ -561,7 +586,48 @@ mod tests {
     fn solved_frames_pass() {
         let r = check_frame(&solved_cap(), &CheckOptions::default());
         assert!(r.ok(), "{r:#?}");
-        assert_eq!(r.rows.len(), 12);
+        assert_eq!(r.rows.len(), 13);
+    }
+
+    /// A frame that lost its units, or got one twice, had every row pass: nothing measured
+    /// the units that were not there.
+    #[test]
+    fn a_face_without_exactly_one_unit_fails_and_is_named() {
+        let row = |f: &FrameFile| {
+            check_frame(f, &CheckOptions::default())
+                .rows
+                .into_iter()
+                .find(|r| r.name.starts_with("faces without exactly one unit"))
+                .unwrap()
+        };
+        let good = solved_cap();
+        assert!(row(&good).ok && good.unit_problems().is_empty());
+        let mut none = good.clone();
+        none.units.clear();
+        none.links.clear();
+        let r = row(&none);
+        assert!(!r.ok && r.at == "the frame has no units", "{r:?}");
+        assert!(!check_frame(&none, &CheckOptions::default()).ok());
+        let mut twice = good.clone();
+        twice.units.push(good.units[0].clone());
+        let r = row(&twice);
+        assert!(!r.ok && r.worst == 2.0, "{r:?}");
+        let id = &good.units[0].id;
+        assert_eq!(
+            r.at,
+            format!("face 0 has 2 units ({id}, {id}) (and 1 more)")
+        );
+        assert_eq!(
+            twice.unit_problems()[1].to_string(),
+            format!("duplicate unit id \"{id}\" (units[0] and units[25])")
+        );
+        let mut lost = good.clone();
+        lost.units.remove(7);
+        assert_eq!(
+            lost.unit_problems(),
+            vec![UnitProblem::FaceWithoutUnit { face: 7 }]
+        );
+        assert!(!row(&lost).ok);
     }
 
     fn solved_cap_as_cut() -> FrameFile {

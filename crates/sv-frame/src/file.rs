@@ -39,6 +39,113 @@ impl FrameFile {
     pub fn joints_closed(&self) -> bool {
         self.links.iter().any(|l| l.joint.is_some())
     }
+
+    /// The label of each unit as people and clients name it: its `id` (`"A03-02"`), or its
+    /// index (`"7"`) where the id is blank.
+    pub fn unit_labels(&self) -> Vec<String> {
+        self.units
+            .iter()
+            .enumerate()
+            .map(|(i, u)| {
+                let id = u.id.trim();
+                if id.is_empty() {
+                    i.to_string()
+                } else {
+                    id.to_string()
+                }
+            })
+            .collect()
+    }
+
+    /// Where the frame breaks "each face of the hub mesh is one unit" (model.md 1) or gives
+    /// two units one label, in face order, then label order; empty when it holds. The one
+    /// place both `spinvalence check` and the streamer ask it. `units[].face` out of range is
+    /// the reader's error (`frame.json: units[3].face: index ...`) and is skipped here.
+    pub fn unit_problems(&self) -> Vec<UnitProblem> {
+        if self.units.is_empty() {
+            return vec![UnitProblem::NoUnits];
+        }
+        let labels = self.unit_labels();
+        let mut on_face: Vec<Vec<usize>> = vec![Vec::new(); self.mesh.faces.len()];
+        for (i, u) in self.units.iter().enumerate() {
+            if let Some(units) = on_face.get_mut(u.face) {
+                units.push(i);
+            }
+        }
+        let mut problems = Vec::new();
+        for (face, units) in on_face.iter().enumerate() {
+            match units.len() {
+                0 => problems.push(UnitProblem::FaceWithoutUnit { face }),
+                1 => {}
+                _ => problems.push(UnitProblem::FaceWithUnits {
+                    face,
+                    units: units.iter().map(|&u| labels[u].clone()).collect(),
+                }),
+            }
+        }
+        let mut first: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+        for (i, label) in labels.iter().enumerate() {
+            if let Some(&j) = first.get(label.as_str()) {
+                problems.push(UnitProblem::DuplicateLabel {
+                    label: label.clone(),
+                    units: [j, i],
+                });
+            } else {
+                first.insert(label, i);
+            }
+        }
+        problems
+    }
+}
+
+/// A break of "each face is one unit, each unit its own label" ([`FrameFile::unit_problems`]).
+/// Faces and units are numbered as in the file (0-based indices into `mesh.faces` and
+/// `units`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum UnitProblem {
+    /// `units` is empty.
+    NoUnits,
+    /// A face of the hub mesh that no unit stands on.
+    FaceWithoutUnit {
+        /// Index into `mesh.faces`.
+        face: usize,
+    },
+    /// A face that more than one unit stands on (a unit written twice).
+    FaceWithUnits {
+        /// Index into `mesh.faces`.
+        face: usize,
+        /// Their labels ([`FrameFile::unit_labels`]), in file order.
+        units: Vec<String>,
+    },
+    /// Two units with one label.
+    DuplicateLabel {
+        /// The label.
+        label: String,
+        /// The first unit with it and this one (indices into `units`).
+        units: [usize; 2],
+    },
+}
+
+impl std::fmt::Display for UnitProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            UnitProblem::NoUnits => write!(f, "the frame has no units"),
+            UnitProblem::FaceWithoutUnit { face } => write!(f, "face {face} has no unit"),
+            UnitProblem::FaceWithUnits { face, units } => {
+                write!(
+                    f,
+                    "face {face} has {} units ({})",
+                    units.len(),
+                    units.join(", ")
+                )
+            }
+            UnitProblem::DuplicateLabel { label, units } => write!(
+                f,
+                "duplicate unit id {label:?} (units[{}] and units[{}])",
+                units[0], units[1]
+            ),
+        }
+    }
 }
 
 /// Design parameters (`params`).

@@ -31,7 +31,7 @@ pub use check::{
 pub use error::{FrameError, MeshError};
 pub use file::{
     FrameFile, FrameParams, JointKind, JointLimits, JointMeasure, JointRecord, LapGoal, LegPins,
-    LinkRecord, MeshData, SolveSummary, UnitRecord, FRAME_FORMAT, FRAME_VERSION,
+    LinkRecord, MeshData, SolveSummary, UnitProblem, UnitRecord, FRAME_FORMAT, FRAME_VERSION,
 };
 pub use hub::{hubs_from_mesh, Hub};
 pub use joint::{

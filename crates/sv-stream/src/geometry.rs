@@ -237,21 +237,10 @@ pub fn design_overlaps(frame: &FrameFile) -> Result<HashMap<(usize, usize), f64>
     Ok(out)
 }
 
-/// Wire id of each unit: its `id` label when present (`"A03-02"`), else its index (`"7"`).
+/// Wire id of each unit: its `id` label when present (`"A03-02"`), else its index (`"7"`)
+/// ([`FrameFile::unit_labels`], the labels `spinvalence check` names units by).
 pub fn unit_ids(frame: &FrameFile) -> Vec<String> {
-    frame
-        .units
-        .iter()
-        .enumerate()
-        .map(|(i, u)| {
-            let id = u.id.trim();
-            if id.is_empty() {
-                i.to_string()
-            } else {
-                id.to_string()
-            }
-        })
-        .collect()
+    frame.unit_labels()
 }
 
 /// Strip of each unit: its `strip` field when set, else the part of its label before the

@@ -75,10 +75,11 @@ pub struct Checked {
 }
 
 impl Plan {
-    /// Read the frame: unit ids (unique, at most [`MAX_ID_LEN`] characters), targets, links.
+    /// Read the frame: each face one unit with its own id ([`FrameFile::unit_problems`], as
+    /// `spinvalence check` holds it), ids at most [`MAX_ID_LEN`] characters, targets, links.
     pub fn new(frame: &FrameFile, tolerance: Tolerance) -> Result<Plan, String> {
-        if frame.units.is_empty() {
-            return Err("no units".into());
+        if let Some(problem) = frame.unit_problems().first() {
+            return Err(problem.to_string());
         }
         let ids = geometry::unit_ids(frame);
         let mut index = HashMap::new();
@@ -88,9 +89,7 @@ impl Plan {
                     "unit {i} has an id longer than {MAX_ID_LEN} characters"
                 ));
             }
-            if index.insert(id.clone(), i).is_some() {
-                return Err(format!("duplicate unit id {id:?}"));
-            }
+            index.insert(id.clone(), i);
         }
         let targets = geometry::unit_targets(frame)?;
         let overlaps = geometry::design_overlaps(frame)?;
@@ -749,6 +748,24 @@ mod tests {
             u.strip = format!("S{}", u.face / 4);
         }
         file
+    }
+
+    /// The streamer refuses what `spinvalence check` fails: the one rule, asked of
+    /// `FrameFile::unit_problems`.
+    #[test]
+    fn a_frame_without_one_unit_per_face_is_refused() {
+        let t = Tolerance::default();
+        assert!(Plan::new(&frame(), t).is_ok());
+        let mut twice = frame();
+        twice.units.push(twice.units[0].clone());
+        let e = Plan::new(&twice, t).unwrap_err();
+        assert!(e.starts_with("face 0 has 2 units"), "{e}");
+        let mut lost = frame();
+        lost.units.remove(3);
+        assert_eq!(Plan::new(&lost, t).unwrap_err(), "face 3 has no unit");
+        let mut none = frame();
+        none.units.clear();
+        assert_eq!(Plan::new(&none, t).unwrap_err(), "the frame has no units");
     }
 
     fn op(id: &str) -> Who<'_> {

@@ -164,4 +164,64 @@ impl StripsFile {
             strips: records,
         }
     }
+
+    /// Check what the fold check needs to read the file against a frame of `units` units:
+    /// the profile parameters ([`ProfileParams::validate`]), every unit index in range and
+    /// each strip's `units` the units of its `flat` tiles. The error names the JSON path,
+    /// e.g. `strips[1].units[0]: index 999 out of range (the frame has 20 units)` or
+    /// `params.thickness = 0: must be a finite length > 0`. Whether every unit is in exactly
+    /// one strip is a check of its own ([`crate::fold_check`]'s first row).
+    pub fn validate(&self, units: usize) -> Result<(), String> {
+        if let Err(crate::StripsError::Parameter { name, value, why }) =
+            self.params.profile.validate()
+        {
+            return Err(format!("params.{name} = {value}: {why}"));
+        }
+        let in_range = |path: String, u: usize| {
+            if u < units {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{path}: index {u} out of range (the frame has {units} units)"
+                ))
+            }
+        };
+        for (i, strip) in self.strips.iter().enumerate() {
+            for (j, &u) in strip.units.iter().enumerate() {
+                in_range(format!("strips[{i}].units[{j}]"), u)?;
+            }
+            for (j, tile) in strip.flat.iter().enumerate() {
+                in_range(format!("strips[{i}].flat[{j}].unit"), tile.unit)?;
+            }
+            for (j, &u) in strip.cut_units.iter().enumerate() {
+                in_range(format!("strips[{i}].cut_units[{j}]"), u)?;
+            }
+            let flat: Vec<usize> = strip.flat.iter().map(|t| t.unit).collect();
+            if flat != strip.units {
+                return Err(format!(
+                    "strips[{i}]: units {:?} but its flat tiles are of units {flat:?}",
+                    strip.units
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Every unit of a frame of `units` units that is in no strip or in more than one, counted
+/// on the strips' flat tiles (what the fold check folds): `(unit, the indices of its
+/// strips)`, in unit order.
+pub(crate) fn strips_of_units(strips: &[StripRecord], units: usize) -> Vec<(usize, Vec<usize>)> {
+    let mut of: Vec<Vec<usize>> = vec![Vec::new(); units];
+    for (si, strip) in strips.iter().enumerate() {
+        for tile in &strip.flat {
+            if let Some(list) = of.get_mut(tile.unit) {
+                list.push(si);
+            }
+        }
+    }
+    of.into_iter()
+        .enumerate()
+        .filter(|(_, list)| list.len() != 1)
+        .collect()
 }

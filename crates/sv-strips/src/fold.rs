@@ -211,6 +211,28 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         limits.overlap_claim,
     );
     let mut rebuilt = Worst::max("units that cannot be rebuilt from their cut", 0.0);
+    // every unit is cut from exactly one strip
+    let mut cover = Worst::max("units in no strip or in more than one", 0.0);
+    let astray = crate::file::strips_of_units(&strips.strips, frame.units.len());
+    cover.see(astray.len() as Real, || {
+        let Some((u, list)) = astray.first() else {
+            return "-".into();
+        };
+        let id = frame.units.get(*u).map_or(u.to_string(), |r| r.id.clone());
+        let first = if list.is_empty() {
+            format!("unit {id} is in no strip")
+        } else {
+            let ids: Vec<String> = list
+                .iter()
+                .map(|&s| format!("{} (strips[{s}])", strips.strips[s].id))
+                .collect();
+            format!("unit {id} is in {} strips: {}", list.len(), ids.join(", "))
+        };
+        match astray.len() {
+            1 => first,
+            n => format!("{first} (and {} more units)", n - 1),
+        }
+    });
     let mut folded: HashMap<usize, Folded> = HashMap::new();
     let mut strip_of: HashMap<usize, usize> = HashMap::new();
     let mut unrebuilt = 0.0;
@@ -436,7 +458,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         }
     }
     let one_lap = one_lap.map(|(_, row)| row);
-    let mut rows: Vec<_> = [pins, legs, plates, laps, claims]
+    let mut rows: Vec<_> = [cover, pins, legs, plates, laps, claims]
         .into_iter()
         .chain(one_lap)
         .chain([

@@ -576,3 +576,81 @@ fn parts_as_cut_fold_into_their_poses_and_a_slot_moved_2_mm_is_caught_at_its_uni
     assert!(!necks.ok && necks.worst > 0.5, "{necks:?}");
     assert!(necks.at.contains(&f.units[unit].id), "{necks:?}");
 }
+
+/// A strips file that lost its strips, or lists one twice, passed the fold check: nothing
+/// was measured of the units it left out, and the lap row said "inf ... ok".
+#[test]
+fn every_unit_in_exactly_one_strip_and_a_row_that_measured_nothing_fails() {
+    let (f, file) = cap_as_cut();
+    let limits = sv_strips::FoldLimits::for_profile(&file.params.profile);
+    file.validate(f.units.len()).unwrap();
+    let cover = "units in no strip or in more than one";
+    assert!(fold_row(&sv_strips::fold_check(&f, &file, &limits), cover).ok);
+
+    let mut empty = file.clone();
+    empty.strips.clear();
+    let r = sv_strips::fold_check(&f, &empty, &limits);
+    let row = fold_row(&r, cover);
+    assert!(!row.ok && row.worst == f.units.len() as f64, "{row:?}");
+    assert!(
+        row.at
+            .starts_with(&format!("unit {} is in no strip", f.units[0].id)),
+        "{row:?}"
+    );
+    let laps = fold_row(&r, "hub lap as cut");
+    assert!(!laps.ok && laps.at == "nothing measured", "{laps:?}");
+
+    let mut twice = file.clone();
+    twice.strips.push(file.strips[0].clone());
+    let row = fold_row(&sv_strips::fold_check(&f, &twice, &limits), cover).clone();
+    let first = file.strips[0].units[0];
+    let id = &file.strips[0].id;
+    assert!(
+        !row.ok && row.worst == file.strips[0].units.len() as f64,
+        "{row:?}"
+    );
+    assert!(
+        row.at.starts_with(&format!(
+            "unit {} is in 2 strips: {id} (strips[0]), {id} (strips[{}])",
+            f.units[first].id,
+            file.strips.len()
+        )),
+        "{row:?}"
+    );
+}
+
+/// What the fold check cannot read is refused by path: indices out of range, strips whose
+/// units are not their tiles', a profile that cannot be cut.
+#[test]
+fn strips_files_the_fold_check_cannot_read_name_the_path() {
+    let (f, file) = cap_as_cut();
+    let n = f.units.len();
+    let mut oob = file.clone();
+    oob.strips[1].units[0] = 999;
+    assert_eq!(
+        oob.validate(n).unwrap_err(),
+        format!("strips[1].units[0]: index 999 out of range (the frame has {n} units)")
+    );
+    let mut oob = file.clone();
+    oob.strips[0].cut_units[2] = n;
+    assert!(oob
+        .validate(n)
+        .unwrap_err()
+        .starts_with("strips[0].cut_units[2]: index"));
+    let mut other = file.clone();
+    other.strips[1].units.swap(0, 1);
+    assert!(
+        other
+            .validate(n)
+            .unwrap_err()
+            .starts_with("strips[1]: units ["),
+        "{:?}",
+        other.validate(n)
+    );
+    let mut thin = file.clone();
+    thin.params.profile.thickness = 0.0;
+    assert_eq!(
+        thin.validate(n).unwrap_err(),
+        "params.thickness = 0: must be a finite length > 0"
+    );
+}
