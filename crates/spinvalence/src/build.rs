@@ -8,12 +8,11 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 use serde::Serialize;
 use sv_frame::Progress;
-use sv_geom::Point3;
 use sv_surface::{SecondaryReport, TargetMesh};
 
 use crate::cli::BuildArgs;
 use crate::config::{self, BuildConfig, Overlap, OverlapRule};
-use crate::output::{self, number, AtomicDir, AtomicFiles};
+use crate::output::{self, bounding_box, box_text, number, AtomicDir, AtomicFiles};
 use crate::solve::{progress_bar, seconds};
 use crate::{report, sheets, strips};
 
@@ -317,21 +316,6 @@ fn layout_on_target(path: &Path, coarse: &sv_frame::QuadMesh, target: &TargetMes
         box_text(&coarse.vertices),
         box_text(&target.vertices)
     )
-}
-
-/// The axis-aligned bounding box of `points`: `(lower, upper)` corners.
-fn bounding_box(points: &[Point3]) -> (Point3, Point3) {
-    let first = points.first().copied().unwrap_or_else(Point3::origin);
-    points
-        .iter()
-        .fold((first, first), |(a, b), p| (a.inf(p), b.sup(p)))
-}
-
-/// A bounding box as the messages give it: `from (x, y, z) to (x, y, z) mm`.
-fn box_text(points: &[Point3]) -> String {
-    let (lo, hi) = bounding_box(points);
-    let p = |q: Point3| format!("({}, {}, {})", number(q.x), number(q.y), number(q.z));
-    format!("from {} to {} mm", p(lo), p(hi))
 }
 
 /// A target too small for 2 x 2 units is most often drawn in metres or inches: say so

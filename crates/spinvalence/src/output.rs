@@ -5,6 +5,7 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, Context, Result};
+use sv_geom::Point3;
 use tempfile::NamedTempFile;
 
 /// A short, lowercase description of an I/O error.
@@ -283,6 +284,21 @@ pub fn print_out(text: &str) -> Result<()> {
         }
         _ => Ok(()),
     }
+}
+
+/// The axis-aligned bounding box of `points`: `(lower, upper)` corners.
+pub fn bounding_box(points: &[Point3]) -> (Point3, Point3) {
+    let first = points.first().copied().unwrap_or_else(Point3::origin);
+    points
+        .iter()
+        .fold((first, first), |(a, b), p| (a.inf(p), b.sup(p)))
+}
+
+/// A bounding box as the messages give it: `from (x, y, z) to (x, y, z) mm`.
+pub fn box_text(points: &[Point3]) -> String {
+    let (lo, hi) = bounding_box(points);
+    let p = |q: Point3| format!("({}, {}, {})", number(q.x), number(q.y), number(q.z));
+    format!("from {} to {} mm", p(lo), p(hi))
 }
 
 /// A number for a table: fixed point in the readable range, scientific outside it.

@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use sv_frame::{MeshChecks, Progress, SolveOptions};
 
 use crate::cli::SolveArgs;
-use crate::output::{self, number, AtomicFiles};
+use crate::output::{self, box_text, number, AtomicFiles};
 
 /// Names of the files `solve` writes, the frame.json last (its presence means both are complete).
 const FRAME_OBJ: &str = "frame.obj";
@@ -39,6 +39,47 @@ pub fn options(args: &SolveArgs) -> Result<SolveOptions> {
     })
 }
 
+/// Mean edge below which a hub mesh is not one of units cut from sheet steel in mm (the
+/// thinnest sheet's least profile puts the hub 19.5 mm inside its tile, docs/geometry.md
+/// 5.4): most often a mesh drawn in metres or inches.
+const MIN_MEAN_EDGE: f64 = 20.0;
+/// Largest mean edge a unit hint names (a unit of 2 m is already a large one).
+const MAX_HINTED_EDGE: f64 = 2000.0;
+
+/// A hub mesh whose faces are too small to be cut is refused with its bounding box and
+/// what it would measure in metres or inches (a mesh in metres solved silently, with
+/// 0.124 mm laps).
+fn in_millimetres(name: &str, mesh: &sv_frame::QuadMesh) -> Result<()> {
+    let mut edges = 0.0;
+    let mut count = 0usize;
+    for f in &mesh.faces {
+        for k in 0..4 {
+            edges += (mesh.vertices[f[(k + 1) % 4]] - mesh.vertices[f[k]]).norm();
+            count += 1;
+        }
+    }
+    let mean = edges / count.max(1) as f64;
+    if mean >= MIN_MEAN_EDGE {
+        return Ok(());
+    }
+    let hints: Vec<String> = [(1000.0, "metres"), (25.4, "inches")]
+        .iter()
+        .filter(|(k, _)| (MIN_MEAN_EDGE..=MAX_HINTED_EDGE).contains(&(mean * k)))
+        .map(|(k, unit)| {
+            format!(
+                "in {unit} its mean edge is {} mm (scale it by {k})",
+                number(mean * k)
+            )
+        })
+        .collect();
+    anyhow::bail!(
+        "{name}: the hub mesh's mean edge is {} mm (its bounding box {}): too small for units cut from sheet steel; hub meshes are read in millimetres{}",
+        number(mean),
+        box_text(&mesh.vertices),
+        if hints.is_empty() { String::new() } else { format!("; {}", hints.join("; ")) }
+    )
+}
+
 /// Run `solve`. Nothing is written unless everything succeeded.
 pub fn run(args: &SolveArgs) -> Result<()> {
     let started = Instant::now();
@@ -54,6 +95,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
             file: name.clone(),
             problem,
         })?;
+    in_millimetres(&name, &mesh)?;
     // Fail on an unwritable output directory before the long part.
     let files = AtomicFiles::create(&args.out, &[FRAME_OBJ, FRAME_JSON])?;
 
