@@ -49,6 +49,24 @@ pub fn read_text(path: &Path) -> Result<String> {
     })
 }
 
+/// Create the output directory `dir` (and its parents) where it is missing; one that is a
+/// file is named as such.
+fn create_output_dir(dir: &Path) -> Result<()> {
+    if dir.is_file() {
+        return Err(anyhow!(
+            "cannot create output directory {}: it is a file, not a directory",
+            dir.display()
+        ));
+    }
+    fs::create_dir_all(dir).map_err(|e| {
+        anyhow!(
+            "cannot create output directory {}: {}",
+            dir.display(),
+            io_message(&e)
+        )
+    })
+}
+
 /// Files that appear in a directory all together or not at all.
 ///
 /// [`AtomicFiles::create`] makes one hidden temporary file per target up front (so an
@@ -71,13 +89,7 @@ impl AtomicFiles {
             .take_while(|d| !d.as_os_str().is_empty() && fs::symlink_metadata(d).is_err())
             .last()
             .map(Path::to_path_buf);
-        fs::create_dir_all(dir).map_err(|e| {
-            anyhow!(
-                "cannot create output directory {}: {}",
-                dir.display(),
-                io_message(&e)
-            )
-        })?;
+        create_output_dir(dir)?;
         let mut pending = Vec::with_capacity(names.len());
         for name in names {
             let prefix = format!(".{name}.");
@@ -166,13 +178,7 @@ impl AtomicDir {
     /// Create the temporary directory for `parent/name` (`parent` is created if needed),
     /// whose drawings are the files with one of `extensions`.
     pub fn create(parent: &Path, name: &str, extensions: &'static [&'static str]) -> Result<Self> {
-        fs::create_dir_all(parent).map_err(|e| {
-            anyhow!(
-                "cannot create output directory {}: {}",
-                parent.display(),
-                io_message(&e)
-            )
-        })?;
+        create_output_dir(parent)?;
         let temp = tempfile::Builder::new()
             .prefix(&format!(".{name}."))
             .suffix(".tmp")
@@ -430,6 +436,19 @@ mod tests {
         assert_eq!(left.len(), 1, "no temporary directories left behind");
         drop(AtomicDir::create(dir.path(), "sheets", DRAWINGS).unwrap());
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn an_output_directory_that_is_a_file_is_named_so() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("out");
+        fs::write(&file, "mine").unwrap();
+        let err = AtomicFiles::create(&file, &["a.txt"])
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.ends_with("out: it is a file, not a directory"), "{err}");
+        assert_eq!(fs::read_to_string(&file).unwrap(), "mine");
     }
 
     #[test]
