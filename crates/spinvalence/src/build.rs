@@ -107,9 +107,11 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
     }
     let size = cfg.secondary.unit_size;
     if !(size.is_finite() && size > 0.0) {
-        bail!("invalid unit size {size}: must be a positive length in mm");
+        bail!("invalid secondary.unit_size (--unit-size) {size}: must be a positive length in mm");
     }
-    cfg.secondary.check().map_err(|e| anyhow!("{e}"))?;
+    cfg.secondary
+        .check()
+        .map_err(|e| anyhow!("secondary: {e}"))?;
     cfg.primary.min_overlap(&cfg.profile)?;
     let (sheet, unweldable) = sheet_for_unit_size(&mut cfg, profile_given);
     if !cfg.joints.close && cfg.frame != crate::config::FrameConfig::default() {

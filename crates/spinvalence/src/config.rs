@@ -407,11 +407,11 @@ impl PrimaryConfig {
     pub fn to_solve_options(&self) -> Result<SolveOptions> {
         let spin = self.spin_angle_deg;
         if !(spin > 0.0 && spin < 90.0) {
-            bail!("invalid spin angle {spin}: must be strictly between 0 and 90 degrees");
+            bail!("invalid primary.spin_angle_deg (--spin-angle) {spin}: must be strictly between 0 and 90 degrees");
         }
         let e = self.expansion;
         if !(e.is_finite() && e >= 1.0) {
-            bail!("invalid expansion {e}: must be a finite number >= 1");
+            bail!("invalid primary.expansion (--expansion) {e}: must be a finite number >= 1");
         }
         let tol = self.planarity_tolerance;
         if !(tol.is_finite() && tol > 0.0) {
@@ -611,7 +611,11 @@ mod tests {
             ("expansion", "nan"),
         ] {
             let c = parse(&format!("[primary]\n{key} = {value}\n"), "c.toml").unwrap();
-            assert!(c.primary.to_solve_options().is_err(), "{key} = {value}");
+            let e = c.primary.to_solve_options().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("primary.{key}")),
+                "{key} = {value}: {e}"
+            );
         }
     }
 
