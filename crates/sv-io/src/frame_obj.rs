@@ -13,6 +13,10 @@ use crate::text::real;
 /// - `legs`: one line element `l` per leg, leg `i` of a unit joining hub corner `s_i` to
 ///   primary corner `r_{(i+1) % 4}` (model.md sec. 3).
 ///
+/// Where the frame has the parts as cut (a build's frame), also `hub_plates` and
+/// `legs_as_cut` ([`as_cut`]): the model's hubs are the zero-width idealisation, up to tens
+/// of millimetres off the plates as cut, so a lap measured in Rhino is measured on those.
+///
 /// Model size (no expansion), mm, right-handed, Z up; the header comment says so, since OBJ
 /// has no unit field (import into a millimetre document, without a Y-up swap). Vertex
 /// numbers are global and 1-based: unit `u`'s hub corner `i` is vertex `4u + i + 1`, its
@@ -74,7 +78,57 @@ pub fn frame_to_obj(file: &FrameFile) -> String {
             let _ = writeln!(out, "l {} {}", hub(u, i), primary(u, (i + 1) % 4));
         }
     }
+    as_cut(file, &mut out);
     out
+}
+
+/// The parts as cut, where the frame has them (every unit its `hub_plate`, its `pins`):
+/// `hub_plates`, one quad per unit (the plate as cut, on which a lap is measured), and
+/// `legs_as_cut`, one line per leg from its pin on the hub plate to its pin on the primary
+/// plate. Their vertices follow the model's: every unit's four hub plate corners, then
+/// every unit's legs, each its hub pin then its rim pin.
+fn as_cut(file: &FrameFile, out: &mut String) {
+    let n = file.units.len();
+    let plates: Option<Vec<_>> = file.units.iter().map(|u| u.hub_plate).collect();
+    let pins: Option<Vec<_>> = file.units.iter().map(|u| u.pins.as_ref()).collect();
+    let mut next = 8 * n + 1;
+    let mut vertex = |out: &mut String, p: &[f64; 3]| {
+        let _ = writeln!(out, "v {} {} {}", real(p[0]), real(p[1]), real(p[2]));
+        next += 1;
+        next - 1
+    };
+    if let Some(plates) = plates {
+        out.push_str("# hub plates as cut (laps are measured on these)\n");
+        let corners: Vec<[usize; 4]> = plates
+            .iter()
+            .map(|plate| plate.each_ref().map(|p| vertex(out, p)))
+            .collect();
+        out.push_str("o hub_plates\ng hub_plates\n");
+        for (unit, c) in file.units.iter().zip(&corners) {
+            let _ = writeln!(
+                out,
+                "# unit {}\nf {} {} {} {}",
+                one_line(&unit.id),
+                c[0],
+                c[1],
+                c[2],
+                c[3]
+            );
+        }
+    }
+    if let Some(pins) = pins {
+        out.push_str("# legs as cut: pin on the hub plate -> pin on the primary plate\n");
+        let ends: Vec<[[usize; 2]; 4]> = pins
+            .iter()
+            .map(|p| std::array::from_fn(|j| [vertex(out, &p.hub[j]), vertex(out, &p.rim[j])]))
+            .collect();
+        out.push_str("o legs_as_cut\ng legs_as_cut\n");
+        for legs in &ends {
+            for [a, b] in legs {
+                let _ = writeln!(out, "l {a} {b}");
+            }
+        }
+    }
 }
 
 /// A label made safe for a comment line.
@@ -174,15 +228,52 @@ mod tests {
         let solved = sv_frame::solve(&mesh, &Default::default(), &mut |_| {}).unwrap();
         let file = solved.to_frame_file(&mesh);
         let p = parse(&frame_to_obj(&file));
-        assert_eq!(p.lines.len(), 4 * file.units.len());
+        let legs: Vec<_> = p.lines.iter().filter(|(g, _)| g == "legs").collect();
+        assert_eq!(legs.len(), 4 * file.units.len());
         for (u, unit) in file.units.iter().enumerate() {
             for i in 0..4 {
-                let [a, b] = p.lines[4 * u + i].1;
+                let [a, b] = legs[4 * u + i].1;
                 let leg = (p.vertices[a] - p.vertices[b]).norm();
                 let side = (point(unit.primary[i]) - point(unit.primary[(i + 1) % 4])).norm();
                 assert!(
                     (leg - side).abs() <= 1e-9 * side,
                     "unit {u} leg {i}: {leg} vs side {side}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_frame_with_its_parts_as_cut_draws_them_too() {
+        let mut file = two_units();
+        let model = parse(&frame_to_obj(&file));
+        assert!(model.faces.iter().all(|(g, _)| g != "hub_plates"));
+        for (u, unit) in file.units.iter_mut().enumerate() {
+            let shift = |p: [f64; 3], d: f64| [p[0] + d, p[1] - d, p[2] + 0.5 * d];
+            unit.hub_plate = Some(unit.hub.map(|p| shift(p, 7.0 + u as f64)));
+            unit.pins = Some(sv_frame::LegPins {
+                hub: unit.hub.map(|p| shift(p, 3.0)),
+                rim: unit.primary.map(|p| shift(p, -2.0)),
+                length: [0.0; 4],
+            });
+        }
+        let text = frame_to_obj(&file);
+        let p = parse(&text);
+        // the model first, as before; then 4 plate corners and 8 pins per unit
+        assert_eq!(p.vertices[..16], model.vertices[..]);
+        assert_eq!(p.vertices.len(), 16 + 2 * 12);
+        let plates: Vec<_> = p.faces.iter().filter(|(g, _)| g == "hub_plates").collect();
+        let legs: Vec<_> = p.lines.iter().filter(|(g, _)| g == "legs_as_cut").collect();
+        assert_eq!((plates.len(), legs.len()), (2, 8));
+        for (u, unit) in file.units.iter().enumerate() {
+            let got: Vec<Point3> = plates[u].1.iter().map(|&v| p.vertices[v]).collect();
+            assert_eq!(got, unit.hub_plate.unwrap().map(point).to_vec());
+            let pins = unit.pins.as_ref().unwrap();
+            for j in 0..4 {
+                let [a, b] = legs[4 * u + j].1;
+                assert_eq!(
+                    (p.vertices[a], p.vertices[b]),
+                    (point(pins.hub[j]), point(pins.rim[j]))
                 );
             }
         }
