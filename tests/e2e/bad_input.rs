@@ -15,15 +15,18 @@ enum Place {
     File,
     /// `file:LINE:`.
     Line(usize),
-    /// `file:LINE:` or `face F`.
+    /// `file:LINE:` or `face F (line LINE)`.
     LineOrFace(usize, usize),
-    /// `file:LINE:` or `vertex V` (0-based).
+    /// `file:LINE:` or `vertex V`.
     LineOrVertex(usize, usize),
     /// `face F` for one of these faces.
     AnyFace(Vec<usize>),
     /// `file:LINE:`, `face F` or `edge (`.
     Edge(usize, usize),
 }
+
+// Faces and vertices above are given 0-based, as the mesh holds them; the messages number
+// them as the file does, from 1, and name a face's line.
 
 /// OBJ text of a mesh with no header: vertex `i` is on line `i + 1`, face `f` on line
 /// `vertices + f + 1`.
@@ -71,12 +74,12 @@ fn assert_rejected(dir: &Dir, file: &str, out: &Output, place: &Place) {
     let line = out.one_error_line();
     assert!(line.contains(file), "the error must name {file}:{out:?}");
     let at_line = |n: usize| line.contains(&format!("{file}:{n}:"));
-    let at_face = |f: usize| line.contains(&format!("face {f}"));
+    let at_face = |f: usize| line.contains(&format!("face {} ", f + 1));
     let ok = match place {
         Place::File => true,
         Place::Line(n) => at_line(*n),
         Place::LineOrFace(n, f) => at_line(*n) || at_face(*f),
-        Place::LineOrVertex(n, v) => at_line(*n) || line.contains(&format!("vertex {v}")),
+        Place::LineOrVertex(n, v) => at_line(*n) || line.contains(&format!("vertex {}", v + 1)),
         Place::AnyFace(faces) => faces.iter().any(|&f| at_face(f)),
         Place::Edge(n, f) => at_line(*n) || at_face(*f) || line.contains("edge ("),
     };

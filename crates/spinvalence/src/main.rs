@@ -181,6 +181,7 @@ mod tests {
         let io = sv_io::IoError::Mesh {
             file: "m.obj".into(),
             problem: mesh,
+            face_lines: Vec::new(),
         };
         let err = anyhow::Error::new(io).context("reading\nthe mesh");
         assert_eq!(one_line(&err), "reading the mesh: m.obj: mesh has no faces");

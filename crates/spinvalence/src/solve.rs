@@ -86,15 +86,10 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     let options = options(args)?;
     let name = args.mesh.display().to_string();
     let bytes = output::read_bytes(&args.mesh)?;
-    let mesh = sv_io::read_quad_obj_bytes(&bytes, &name)?;
     let checks = MeshChecks {
         planarity_tolerance: options.planarity_tolerance,
     };
-    mesh.validate(&checks)
-        .map_err(|problem| sv_io::IoError::Mesh {
-            file: name.clone(),
-            problem,
-        })?;
+    let mesh = sv_io::read_and_validate_quad_obj_bytes(&bytes, &name, &checks)?;
     in_millimetres(&name, &mesh)?;
     // Fail on an unwritable output directory before the long part.
     let files = AtomicFiles::create(&args.out, &[FRAME_OBJ, FRAME_JSON])?;

@@ -1,19 +1,18 @@
 use thiserror::Error;
 
-/// A quad mesh that cannot carry a frame. Every message names the face, vertex or edge.
+/// A quad mesh that cannot carry a frame. Every message names the face, vertex or edge:
+/// as [`MeshError::describe`] is told to (a file's reader: 1-based, with its lines), else
+/// by their 0-based indices in the mesh (`Display`).
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum MeshError {
     /// No faces at all.
-    #[error("mesh has no faces")]
     Empty,
     /// A vertex coordinate is NaN or infinite.
-    #[error("vertex {vertex} has a non-finite coordinate")]
     NonFinite {
         /// Vertex index (0-based).
         vertex: usize,
     },
     /// A face refers to a vertex that does not exist.
-    #[error("face {face} refers to vertex {index}, but the mesh has {count} vertices")]
     IndexOutOfRange {
         /// Face index.
         face: usize,
@@ -23,15 +22,13 @@ pub enum MeshError {
         count: usize,
     },
     /// Repeated vertex, zero-length edge or zero area.
-    #[error("face {face} is degenerate: {why}")]
     DegenerateFace {
         /// Face index.
         face: usize,
         /// What is degenerate.
-        why: String,
+        why: Degeneracy,
     },
     /// An edge used by more than two faces, or twice in the same direction.
-    #[error("edge ({v}, {w}) is non-manifold: {why}")]
     NonManifoldEdge {
         /// First vertex.
         v: usize,
@@ -39,9 +36,10 @@ pub enum MeshError {
         w: usize,
         /// What is wrong.
         why: String,
+        /// The faces that list the edge from `v` to `w`.
+        faces: Vec<usize>,
     },
     /// Diagonal distance / mean edge above the tolerance.
-    #[error("face {face} is not planar: diagonal distance {distance:.3} mm is {ratio:.4} of its mean edge (tolerance {tolerance})")]
     NonPlanar {
         /// Face index.
         face: usize,
@@ -53,11 +51,82 @@ pub enum MeshError {
         tolerance: f64,
     },
     /// Fewer faces or links than a frame needs.
-    #[error("mesh is smaller than a frame: {why}")]
     TooSmall {
         /// Why.
         why: String,
     },
+}
+
+/// What makes a face degenerate (vertex indices 0-based).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Degeneracy {
+    /// The face lists this vertex twice.
+    VertexTwice(usize),
+    /// The edge between these two vertices has zero length.
+    ZeroEdge(usize, usize),
+    /// The face has no area.
+    ZeroArea,
+    /// Anything else, said in words.
+    Other(String),
+}
+
+impl MeshError {
+    /// The message with faces and vertices named by `face` and `vertex` (from a 0-based
+    /// index: e.g. `3 (line 23)` for a file's third face).
+    pub fn describe(
+        &self,
+        face: &dyn Fn(usize) -> String,
+        vertex: &dyn Fn(usize) -> String,
+    ) -> String {
+        match self {
+            MeshError::Empty => "mesh has no faces".into(),
+            MeshError::NonFinite { vertex: v } => {
+                format!("vertex {} has a non-finite coordinate", vertex(*v))
+            }
+            MeshError::IndexOutOfRange { face: f, index, count } => format!(
+                "face {} refers to vertex {}, but the mesh has {count} vertices",
+                face(*f),
+                vertex(*index)
+            ),
+            MeshError::DegenerateFace { face: f, why } => {
+                let why = match why {
+                    Degeneracy::VertexTwice(v) => format!("vertex {} is used twice", vertex(*v)),
+                    Degeneracy::ZeroEdge(v, w) => {
+                        format!("edge ({}, {}) has zero length", vertex(*v), vertex(*w))
+                    }
+                    Degeneracy::ZeroArea => "zero area".into(),
+                    Degeneracy::Other(why) => why.clone(),
+                };
+                format!("face {} is degenerate: {why}", face(*f))
+            }
+            MeshError::NonManifoldEdge { v, w, why, faces } => {
+                let named: Vec<String> = faces.iter().map(|&f| face(f)).collect();
+                format!(
+                    "edge ({}, {}) is non-manifold: {why} (faces {})",
+                    vertex(*v),
+                    vertex(*w),
+                    named.join(", ")
+                )
+            }
+            MeshError::NonPlanar {
+                face: f,
+                distance,
+                ratio,
+                tolerance,
+            } => format!(
+                "face {} is not planar: diagonal distance {distance:.3} mm is {ratio:.4} of its mean edge (tolerance {tolerance})",
+                face(*f)
+            ),
+            MeshError::TooSmall { why } => format!("mesh is smaller than a frame: {why}"),
+        }
+    }
+}
+
+impl std::fmt::Display for MeshError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let index = |i: usize| i.to_string();
+        f.write_str(&self.describe(&index, &index))
+    }
 }
 
 /// Errors of the frame stage.

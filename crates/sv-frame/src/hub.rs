@@ -78,7 +78,9 @@ pub fn hubs_from_mesh(mesh: &QuadMesh, spin_angle: Real) -> Result<Vec<Hub>, Fra
             Hub::fit(&mesh.face_points(f), spin_angle).ok_or_else(|| {
                 FrameError::Mesh(crate::MeshError::DegenerateFace {
                     face: f,
-                    why: "no best-fit rhombus (diagonals parallel or reversed)".into(),
+                    why: crate::Degeneracy::Other(
+                        "no best-fit rhombus (diagonals parallel or reversed)".into(),
+                    ),
                 })
             })
         })

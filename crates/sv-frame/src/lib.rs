@@ -28,7 +28,7 @@ mod unit;
 pub use check::{
     check_frame, CheckOptions, CheckReport, CheckRow, Worst, GOAL_CONICAL_DEG, GOAL_PLANARITY,
 };
-pub use error::{FrameError, MeshError};
+pub use error::{Degeneracy, FrameError, MeshError};
 pub use file::{
     FrameFile, FrameParams, JointKind, JointLimits, JointMeasure, JointRecord, LapGoal, LegPins,
     LinkRecord, MeshData, SolveSummary, UnitProblem, UnitRecord, FRAME_FORMAT, FRAME_VERSION,

@@ -4,7 +4,7 @@ use std::collections::HashMap;
 
 use sv_geom::{is_finite_point, quad_diagonal_distance, Point3, Real, Vector3};
 
-use crate::MeshError;
+use crate::{Degeneracy, MeshError};
 
 /// A quad mesh in mm. Faces list four vertex indices counter-clockwise seen from the
 /// side the hub normals point to (`n = (v0 - v2) x (v1 - v3)`).
@@ -277,14 +277,14 @@ impl QuadMesh {
                     if face[k] == face[m] {
                         return Err(MeshError::DegenerateFace {
                             face: f,
-                            why: format!("vertex {} is used twice", face[k]),
+                            why: Degeneracy::VertexTwice(face[k]),
                         });
                     }
                 }
                 if (p[k] - p[(k + 1) % 4]).norm() <= eps {
                     return Err(MeshError::DegenerateFace {
                         face: f,
-                        why: format!("edge ({}, {}) has zero length", face[k], face[(k + 1) % 4]),
+                        why: Degeneracy::ZeroEdge(face[k], face[(k + 1) % 4]),
                     });
                 }
             }
@@ -292,7 +292,7 @@ impl QuadMesh {
             if area2 <= 1e-6 * scale * scale {
                 return Err(MeshError::DegenerateFace {
                     face: f,
-                    why: "zero area".into(),
+                    why: Degeneracy::ZeroArea,
                 });
             }
         }
@@ -307,12 +307,24 @@ impl QuadMesh {
         keys.sort();
         for (&(v, w), &n) in keys {
             if n > 1 {
-                let why = if directed.contains_key(&(w, v)) {
+                let faces: Vec<usize> = (0..self.faces.len())
+                    .filter(|&f| {
+                        (0..4).any(|k| self.faces[f][k] == v && self.faces[f][(k + 1) % 4] == w)
+                    })
+                    .collect();
+                let corners = |f: usize| {
+                    let mut c = self.faces[f];
+                    c.sort_unstable();
+                    c
+                };
+                let why = if faces.windows(2).any(|p| corners(p[0]) == corners(p[1])) {
+                    "the same face is listed twice".to_string()
+                } else if directed.contains_key(&(w, v)) {
                     "used by more than two faces".to_string()
                 } else {
                     "two faces list it in the same direction (inconsistent orientation)".to_string()
                 };
-                return Err(MeshError::NonManifoldEdge { v, w, why });
+                return Err(MeshError::NonManifoldEdge { v, w, why, faces });
             }
         }
         for f in 0..self.faces.len() {

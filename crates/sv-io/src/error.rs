@@ -38,13 +38,17 @@ pub enum IoError {
         message: String,
     },
     /// The quad mesh parsed but cannot carry a frame ([`sv_frame::QuadMesh::validate`]).
-    #[error("{file}: {problem}")]
+    #[error("{file}: {}", in_file(problem, face_lines))]
     Mesh {
         /// Display name of the file.
         file: String,
         /// The mesh check that failed (face and vertex indices are 0-based). Not an
         /// error `source`: it is in the message already.
         problem: MeshError,
+        /// The line of each face in the file: the message then numbers faces and vertices
+        /// as the file does (from 1) and names the face's line. Empty for a mesh that was
+        /// not read from a file (0-based indices).
+        face_lines: Vec<usize>,
     },
     /// JSON that does not parse, at a line and column (both 1-based).
     #[error("{file}:{line}:{column}: {message}")]
@@ -68,6 +72,18 @@ pub enum IoError {
         /// What is wrong.
         message: String,
     },
+}
+
+/// `problem` as the file names its faces and vertices (see [`IoError::Mesh`]).
+fn in_file(problem: &MeshError, face_lines: &[usize]) -> String {
+    if face_lines.is_empty() {
+        return problem.to_string();
+    }
+    let face = |f: usize| match face_lines.get(f) {
+        Some(line) => format!("{} (line {line})", f + 1),
+        None => (f + 1).to_string(),
+    };
+    problem.describe(&face, &|v| (v + 1).to_string())
 }
 
 impl IoError {
@@ -124,6 +140,7 @@ mod tests {
         let e = IoError::Mesh {
             file: "hubs.obj".into(),
             problem: MeshError::Empty,
+            face_lines: Vec::new(),
         };
         assert_eq!(e.to_string(), "hubs.obj: mesh has no faces");
         assert_eq!(e.file(), "hubs.obj");

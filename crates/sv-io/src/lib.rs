@@ -48,7 +48,8 @@ pub use frame_json::{
 };
 pub use frame_obj::frame_to_obj;
 pub use quad_obj::{
-    read_and_validate_quad_obj, read_quad_obj, read_quad_obj_bytes, write_quad_obj,
+    read_and_validate_quad_obj, read_and_validate_quad_obj_bytes, read_quad_obj,
+    read_quad_obj_bytes, write_quad_obj,
 };
 pub use target::{read_target, TargetFile, TargetRepairs};
 pub use tri_mesh::{read_tri_mesh, TriMesh, WELD_RELATIVE_TOLERANCE};

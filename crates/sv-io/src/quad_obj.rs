@@ -29,6 +29,11 @@ use crate::IoError;
 /// is farther than 1e12 mm from the origin (a corrupt number, or not in mm?)` (1-based
 /// vertex numbers; the target reader's reach).
 pub fn read_quad_obj(text: &str, name: &str) -> Result<QuadMesh, IoError> {
+    read_quad_obj_lines(text, name).map(|(mesh, _)| mesh)
+}
+
+/// [`read_quad_obj`], with the line of each face's `f` statement.
+fn read_quad_obj_lines(text: &str, name: &str) -> Result<(QuadMesh, Vec<usize>), IoError> {
     let data = parse_obj(text, name, "an OBJ")?;
     if data.faces.is_empty() {
         return Err(IoError::whole(
@@ -58,10 +63,12 @@ pub fn read_quad_obj(text: &str, name: &str) -> Result<QuadMesh, IoError> {
             }
         }
     }
-    Ok(QuadMesh {
+    let lines = data.faces.iter().map(|f| f.line).collect();
+    let mesh = QuadMesh {
         vertices: data.vertices,
         faces,
-    })
+    };
+    Ok((mesh, lines))
 }
 
 /// [`read_quad_obj`] on raw bytes: drops a UTF-8 byte order mark and reads invalid UTF-8
@@ -78,20 +85,33 @@ pub fn read_quad_obj_bytes(bytes: &[u8], name: &str) -> Result<QuadMesh, IoError
 /// consistently oriented, planar within `checks`, at least one interior edge).
 ///
 /// # Errors
-/// The syntax errors of [`read_quad_obj`], or the mesh error prefixed with the file name:
-/// `hubs.obj: face 17 is not planar: ...` (face and vertex indices are 0-based: face 17 is
-/// the 18th `f` line).
+/// The syntax errors of [`read_quad_obj`], or the mesh error prefixed with the file name,
+/// faces and vertices numbered as the file does (from 1) and each face with its line:
+/// `hubs.obj: face 18 (line 43) is not planar: ...`.
 pub fn read_and_validate_quad_obj(
     text: &str,
     name: &str,
     checks: &MeshChecks,
 ) -> Result<QuadMesh, IoError> {
-    let mesh = read_quad_obj(text, name)?;
+    let (mesh, face_lines) = read_quad_obj_lines(text, name)?;
     mesh.validate(checks).map_err(|problem| IoError::Mesh {
         file: name.to_string(),
         problem,
+        face_lines,
     })?;
     Ok(mesh)
+}
+
+/// [`read_and_validate_quad_obj`] on raw bytes, read as [`read_quad_obj_bytes`] reads them.
+///
+/// # Errors
+/// As [`read_and_validate_quad_obj`].
+pub fn read_and_validate_quad_obj_bytes(
+    bytes: &[u8],
+    name: &str,
+    checks: &MeshChecks,
+) -> Result<QuadMesh, IoError> {
+    read_and_validate_quad_obj(&decode(bytes), name, checks)
 }
 
 /// Write `mesh` as OBJ text: each line of `header` as a `# ` comment, then `v x y z` lines
@@ -297,9 +317,21 @@ mod tests {
             ),
             "{e}"
         );
+        // numbered as the file numbers them: the second face, on its own line
+        let face_line = |text: &str, k: usize| {
+            1 + text
+                .lines()
+                .enumerate()
+                .filter(|(_, l)| l.starts_with("f "))
+                .nth(k)
+                .unwrap()
+                .0
+        };
         assert!(
-            e.to_string()
-                .starts_with("hubs.obj: face 1 is not planar: "),
+            e.to_string().starts_with(&format!(
+                "hubs.obj: face 2 (line {}) is not planar: ",
+                face_line(&text, 1)
+            )),
             "{e}"
         );
 
@@ -309,6 +341,25 @@ mod tests {
         let e = read_and_validate_quad_obj(&text, "hubs.obj", &MeshChecks::default()).unwrap_err();
         assert!(e.to_string().starts_with("hubs.obj: edge ("), "{e}");
         assert!(e.to_string().contains("non-manifold"), "{e}");
+        assert!(
+            e.to_string()
+                .contains(&format!("2 (line {})", face_line(&text, 1))),
+            "{e}"
+        );
+        // a face listed twice is named as such, with both lines
+        let mut mesh = grid();
+        mesh.faces.push(mesh.faces[0]);
+        let text = write_quad_obj(&mesh, "");
+        let e = read_and_validate_quad_obj(&text, "hubs.obj", &MeshChecks::default()).unwrap_err();
+        let last = mesh.faces.len();
+        assert!(
+            e.to_string().contains(&format!(
+                "the same face is listed twice (faces 1 (line {}), {last} (line {}))",
+                face_line(&text, 0),
+                face_line(&text, last - 1)
+            )),
+            "{e}"
+        );
 
         let text = write_quad_obj(&QuadMesh::grid(1, 1, 100.0), "");
         let e = read_and_validate_quad_obj(&text, "one.obj", &MeshChecks::default()).unwrap_err();

@@ -200,7 +200,9 @@ fn unit_error(f: usize, e: UnitFailure) -> FrameError {
     match e {
         UnitFailure::NoHub => FrameError::Mesh(crate::MeshError::DegenerateFace {
             face: f,
-            why: "no best-fit rhombus (diagonals parallel or reversed)".into(),
+            why: crate::Degeneracy::Other(
+                "no best-fit rhombus (diagonals parallel or reversed)".into(),
+            ),
         }),
         UnitFailure::Cut(why) => FrameError::Cut { unit: f, why },
     }
@@ -585,7 +587,7 @@ pub fn close_joints(
             let degenerate = |why: &str| {
                 FrameError::Mesh(crate::MeshError::DegenerateFace {
                     face: f,
-                    why: why.into(),
+                    why: crate::Degeneracy::Other(why.into()),
                 })
             };
             let mut hub = Hub::fit(&out.face_points(f), spins[f]).ok_or_else(|| {
