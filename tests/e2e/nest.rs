@@ -171,6 +171,11 @@ fn bad_nest_input_is_one_line() {
             "invalid --margin 760: leaves no usable area on the 3000 x 1500 mm sheet (2 x 760 mm >= 1500 mm)",
         ),
         (vec!["a.dxf", "--nest-seconds", "0"], "--nest-seconds"),
+        // a cap past the clock's range panicked
+        (
+            vec!["a.dxf", "--nest-seconds", "1e20"],
+            "--nest-seconds 100000000000000000000: must be > 0 and at most a day",
+        ),
         (vec!["garbage.dxf"], "nothing to nest"),
         (
             vec!["date.dxf"],

@@ -154,12 +154,7 @@ impl NestConfig {
         }
         sv_nest::margin_leaves_room(&sheets, self.margin)
             .map_err(|why| anyhow!("invalid nest.margin {}: {why}", self.margin))?;
-        if !(self.seconds.is_finite() && self.seconds > 0.0 && self.seconds <= 86_400.0) {
-            bail!(
-                "invalid nest.seconds {}: must be > 0 and at most a day",
-                self.seconds
-            );
-        }
+        nest_seconds_ok(self.seconds).map_err(|why| anyhow!("invalid nest.seconds {why}"))?;
         Ok(sv_nest::NestOptions {
             sheets,
             margin: self.margin,
@@ -348,6 +343,17 @@ impl Default for JointsConfig {
             split_iterations: sv_frame::JointOptions::default().split_iterations,
             both_directions: true,
         }
+    }
+}
+
+/// The nesting's time cap, in seconds: more than 0 and at most a day (`build`'s
+/// `nest.seconds` and `--nest-seconds` of `build` and `nest`; a cap of 1e20 s overflowed the
+/// clock and panicked). The error is the value and why.
+pub fn nest_seconds_ok(seconds: f64) -> std::result::Result<(), String> {
+    if seconds.is_finite() && seconds > 0.0 && seconds <= 86_400.0 {
+        Ok(())
+    } else {
+        Err(format!("{seconds}: must be > 0 and at most a day (86400)"))
     }
 }
 

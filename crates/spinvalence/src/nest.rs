@@ -95,9 +95,8 @@ fn check(args: &NestArgs) -> Result<()> {
             bail!("invalid {flag} {v}: must be a finite length >= 0 mm");
         }
     }
-    if !(args.nest_seconds.is_finite() && args.nest_seconds > 0.0) {
-        bail!("invalid --nest-seconds {}: must be > 0", args.nest_seconds);
-    }
+    crate::config::nest_seconds_ok(args.nest_seconds)
+        .map_err(|why| anyhow!("invalid --nest-seconds {why}"))?;
     if args.parts.is_empty() {
         bail!("no parts given: name DXF files (or one jagua-rs JSON instance)");
     }
