@@ -95,6 +95,29 @@ fn default_build_writes_the_pavilion_into_out_and_checks_clean() {
     let units = frame["units"].as_array().unwrap().len();
     assert!(units > 50, "{units} units");
     assert!(out.stdout.contains(&units.to_string()), "{out:?}");
+    // the spin the hubs were built at, as frame.json has it
+    let spins: Vec<f64> = frame["units"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|u| num(&u["spin"], "spin").to_degrees())
+        .collect();
+    let (lo, hi) = spins
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &s| {
+            (a.min(s), b.max(s))
+        });
+    let spin_row = out
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("spin angle"))
+        .expect("spin angle row");
+    assert!(
+        spin_row.contains(&format!(
+            "45.0 deg asked; the hubs turned to {lo:.1} .. {hi:.1} deg"
+        )),
+        "{spin_row}"
+    );
     let report = read_json(&dir.join("out/report.json"));
     assert_eq!(report["faces"].as_u64(), Some(units as u64));
     // the fold check of the parts as cut is in the report: every row holds on the default

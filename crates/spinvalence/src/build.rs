@@ -1114,7 +1114,7 @@ fn joint_rows(
             if j.splits.len() > 3 { "; ..." } else { "" }
         ));
     }
-    vec![
+    let mut rows = vec![
         vec!["bridges (in strips)".into(), bridges],
         vec![
             "welds (between strips)".into(),
@@ -1128,7 +1128,30 @@ fn joint_rows(
                 j.iterations
             ),
         ],
-    ]
+    ];
+    rows.extend(spin_row(frame));
+    rows
+}
+
+/// The spin the hubs were given, where the joint solve turned them from the one asked
+/// (`units[].spin`): the asked angle and the range built, so that a frame asked at 10
+/// degrees and built at 17-25 says so.
+fn spin_row(frame: &sv_frame::FrameFile) -> Option<Vec<String>> {
+    let spins: Vec<f64> = frame.units.iter().filter_map(|u| u.spin).collect();
+    let lo = spins.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = spins.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (!spins.is_empty()).then(|| {
+        vec![
+            "spin angle".into(),
+            format!(
+                "{:.1} deg asked; the hubs turned to {:.1} .. {:.1} deg to close the joints \
+                 (frame.json units[].spin)",
+                frame.params.spin_angle.to_degrees(),
+                lo.to_degrees(),
+                hi.to_degrees()
+            ),
+        ]
+    })
 }
 
 /// A link as the summary names it: its two units' ids, `A01-02 - A03-02`.
