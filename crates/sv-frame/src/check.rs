@@ -621,6 +621,17 @@ mod tests {
             twice.unit_problems()[1].to_string(),
             format!("duplicate unit id \"{id}\" (units[0] and units[25])")
         );
+        // many units on one face: a few named, the rest counted
+        let mut many = good.clone();
+        for k in 0..40 {
+            let mut u = good.units[0].clone();
+            u.id = format!("X{k}");
+            many.units.push(u);
+        }
+        assert_eq!(
+            many.unit_problems()[0].to_string(),
+            format!("face 0 has 41 units ({id}, X0, X1, ... and 38 more)")
+        );
         let mut lost = good.clone();
         lost.units.remove(7);
         assert_eq!(

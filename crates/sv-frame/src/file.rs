@@ -132,12 +132,12 @@ impl std::fmt::Display for UnitProblem {
             UnitProblem::NoUnits => write!(f, "the frame has no units"),
             UnitProblem::FaceWithoutUnit { face } => write!(f, "face {face} has no unit"),
             UnitProblem::FaceWithUnits { face, units } => {
-                write!(
-                    f,
-                    "face {face} has {} units ({})",
-                    units.len(),
-                    units.join(", ")
-                )
+                // a few ids, not thousands: the message stays one short line
+                let named = match units.len() {
+                    n if n <= 4 => units.join(", "),
+                    n => format!("{}, ... and {} more", units[..3].join(", "), n - 3),
+                };
+                write!(f, "face {face} has {} units ({named})", units.len())
             }
             UnitProblem::DuplicateLabel { label, units } => write!(
                 f,

@@ -198,7 +198,7 @@ pub fn big_frame(nx: usize, ny: usize) -> FrameFile {
             let mut u = base.units[0].clone();
             u.id = format!("A{j:03}-{i:03}");
             u.strip = format!("A{j:03}");
-            u.face = (j * nx + i) % base.units.len();
+            u.face = j * nx + i;
             u.hub = [
                 [cx + r, cy, 100.0],
                 [cx, cy + r, 100.0],
@@ -232,9 +232,16 @@ pub fn big_frame(nx: usize, ny: usize) -> FrameFile {
             }
         }
     }
+    // one hub mesh face per unit (a frame has one unit on every face)
+    let grid = sv_frame::QuadMesh::grid(nx, ny, step);
+    let mesh = sv_frame::MeshData {
+        vertices: grid.vertices.iter().map(|p| [p.x, p.y, 100.0]).collect(),
+        faces: grid.faces,
+    };
     FrameFile {
         units,
         links,
+        mesh,
         ..base
     }
 }
