@@ -369,12 +369,21 @@ fn bad_build_input_is_one_line_and_writes_nothing() {
         (vec!["--config", "slot.toml"], "slot_width"),
         (vec!["--config", "thin.toml"], "thickness"),
         (vec!["--strip-direction", "w"], "strip direction"),
-        (vec!["--unit-size", "0"], "unit size"),
-        (vec!["--unit-size", "-300"], "unit size"),
-        (vec!["--unit-size", "nan"], "unit size"),
-        (vec!["--spin-angle", "90"], "spin angle"),
-        (vec!["--spin-angle", "0"], "spin angle"),
-        (vec!["--expansion", "0.5"], "expansion"),
+        (
+            vec!["--unit-size", "0"],
+            "secondary.unit_size (--unit-size) 0",
+        ),
+        (vec!["--unit-size", "-300"], "--unit-size"),
+        (vec!["--unit-size", "nan"], "--unit-size"),
+        (
+            vec!["--spin-angle", "90"],
+            "primary.spin_angle_deg (--spin-angle) 90",
+        ),
+        (vec!["--spin-angle", "0"], "--spin-angle"),
+        (
+            vec!["--expansion", "0.5"],
+            "primary.expansion (--expansion) 0.5",
+        ),
         // a target smaller than one unit
         (
             vec!["--target", "builtin:flat", "--unit-size", "100000"],
