@@ -61,7 +61,8 @@ fn non_planar_fixture_fails_validation_with_the_face() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.starts_with("non_planar.obj: face 1 is not planar: "),
+        // the second face, on line 8, numbered as the file numbers it
+        e.starts_with("non_planar.obj: face 2 (line 8) is not planar: "),
         "{e}"
     );
     assert_one_line(&e);
