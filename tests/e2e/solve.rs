@@ -292,20 +292,7 @@ fn a_hub_mesh_drawn_in_metres_is_named_with_its_box() {
     let dir = Dir::new();
     // the small grid fixture, every coordinate divided by 1000 (drawn in metres)
     let text = std::fs::read_to_string(fixtures::grid_small()).unwrap();
-    let metres: String = text
-        .lines()
-        .map(|l| match l.strip_prefix("v ") {
-            Some(xyz) => {
-                let m: Vec<String> = xyz
-                    .split_whitespace()
-                    .map(|c| (c.parse::<f64>().unwrap() / 1000.0).to_string())
-                    .collect();
-                format!("v {}\n", m.join(" "))
-            }
-            None => format!("{l}\n"),
-        })
-        .collect();
-    dir.write("m.obj", metres);
+    dir.write("m.obj", crate::util::scale_obj(&text, 0.001));
     let out = dir.run(&["solve", "--mesh", "m.obj", "--out", "out"]);
     out.expect_code(2);
     let line = out.one_error_line();

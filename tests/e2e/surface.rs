@@ -291,20 +291,7 @@ fn a_layout_that_cannot_be_used_is_named_by_its_own_file() {
     lines[first_face] = format!("f {} {} {} {}", f[4], f[3], f[2], f[1]);
     dir.write("flipped.obj", lines.join("\n") + "\n");
     // the same layout drawn in metres: it does not lie on the target
-    let metres: String = text
-        .lines()
-        .map(|l| match l.strip_prefix("v ") {
-            Some(xyz) => {
-                let m: Vec<String> = xyz
-                    .split_whitespace()
-                    .map(|c| (c.parse::<f64>().unwrap() / 1000.0).to_string())
-                    .collect();
-                format!("v {}\n", m.join(" "))
-            }
-            None => format!("{l}\n"),
-        })
-        .collect();
-    dir.write("metres.obj", metres);
+    dir.write("metres.obj", crate::util::scale_obj(&text, 0.001));
     let run = |layout: &str| {
         let out = dir.run(&[
             "build",

@@ -121,6 +121,23 @@ impl Output {
     }
 }
 
+/// OBJ text with every vertex coordinate multiplied by `k` (a mesh drawn in another unit:
+/// `k = 0.001` for metres); every other line as it was.
+pub fn scale_obj(text: &str, k: f64) -> String {
+    text.lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(xyz) => {
+                let c: Vec<String> = xyz
+                    .split_whitespace()
+                    .map(|c| (c.parse::<f64>().unwrap() * k).to_string())
+                    .collect();
+                format!("v {}\n", c.join(" "))
+            }
+            None => format!("{l}\n"),
+        })
+        .collect()
+}
+
 /// Parse a JSON file.
 pub fn read_json(path: &Path) -> serde_json::Value {
     let text = fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));

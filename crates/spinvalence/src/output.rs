@@ -353,6 +353,16 @@ pub fn table(rows: &[Vec<String>]) -> String {
 mod tests {
     use super::*;
 
+    /// The entries of `dir`, sorted.
+    fn names(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        names
+    }
+
     #[test]
     fn numbers_are_short_and_keep_small_values() {
         assert_eq!(number(0.0), "0");
@@ -381,12 +391,7 @@ mod tests {
             "temporary files exist"
         );
         files.commit(&["A", "B"]).unwrap();
-        let mut names: Vec<_> = fs::read_dir(&out)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().into_string().unwrap())
-            .collect();
-        names.sort();
-        assert_eq!(names, ["a.txt", "b.txt"]);
+        assert_eq!(names(&out), ["a.txt", "b.txt"]);
         assert_eq!(fs::read_to_string(out.join("b.txt")).unwrap(), "B");
     }
 
@@ -426,11 +431,11 @@ mod tests {
             "the old directory stays until commit"
         );
         second.commit().unwrap();
-        let names: Vec<_> = fs::read_dir(&target)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().into_string().unwrap())
-            .collect();
-        assert_eq!(names, ["A01.dxf"], "stale files of the old run are gone");
+        assert_eq!(
+            names(&target),
+            ["A01.dxf"],
+            "stale files of the old run are gone"
+        );
         assert_eq!(fs::read_to_string(target.join("A01.dxf")).unwrap(), "new");
         let left: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(left.len(), 1, "no temporary directories left behind");
@@ -488,12 +493,7 @@ mod tests {
         let second = AtomicDir::create(dir.path(), "sheets", DRAWINGS).unwrap();
         second.write("sheet-02.DXF", "two").unwrap();
         second.commit().unwrap();
-        let mut names: Vec<_> = fs::read_dir(&target)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().into_string().unwrap())
-            .collect();
-        names.sort();
-        assert_eq!(names, ["mine", "sheet-01.nc", "sheet-02.DXF"]);
+        assert_eq!(names(&target), ["mine", "sheet-01.nc", "sheet-02.DXF"]);
         assert_eq!(
             fs::read_to_string(target.join("mine/notes.txt")).unwrap(),
             "N"

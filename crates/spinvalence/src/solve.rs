@@ -50,15 +50,7 @@ const MAX_HINTED_EDGE: f64 = 2000.0;
 /// what it would measure in metres or inches (a mesh in metres solved silently, with
 /// 0.124 mm laps).
 fn in_millimetres(name: &str, mesh: &sv_frame::QuadMesh) -> Result<()> {
-    let mut edges = 0.0;
-    let mut count = 0usize;
-    for f in &mesh.faces {
-        for k in 0..4 {
-            edges += (mesh.vertices[f[(k + 1) % 4]] - mesh.vertices[f[k]]).norm();
-            count += 1;
-        }
-    }
-    let mean = edges / count.max(1) as f64;
+    let mean = mesh.mean_edge();
     if mean >= MIN_MEAN_EDGE {
         return Ok(());
     }

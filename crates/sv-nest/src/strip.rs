@@ -664,6 +664,11 @@ mod tests {
         )
     }
 
+    /// The one-line refusal of an instance.
+    fn refused(json: &str) -> String {
+        StripInstance::from_json(json).unwrap_err().to_string()
+    }
+
     const FIXED: &str = r#"{"mode": "discrete", "angles": [0]}"#;
     const QUARTERS: &str = r#"{"mode": "stepped", "step": 90}"#;
     const ANY: &str = r#"{"mode": "continuous"}"#;
@@ -671,9 +676,7 @@ mod tests {
     #[test]
     fn an_item_higher_than_the_strip_is_refused_by_name_unless_a_rotation_fits() {
         // 300 high, the strip 200: refused, naming the item, its height and the strip's
-        let e = StripInstance::from_json(&rectangles(200.0, 100.0, 300.0, FIXED, 2))
-            .unwrap_err()
-            .to_string();
+        let e = refused(&rectangles(200.0, 100.0, 300.0, FIXED, 2));
         assert!(
             e.contains("item 7 (300 high at best")
                 && e.contains("does not fit the strip height 200")
@@ -698,9 +701,7 @@ mod tests {
         // any rotation: a 10 x 300 rectangle fits a strip 12 high only level (its least
         // width, across a hull edge), a strip 9 high not at all
         assert!(StripInstance::from_json(&rectangles(12.0, 300.0, 10.0, ANY, 1)).is_ok());
-        let e = StripInstance::from_json(&rectangles(9.0, 10.0, 300.0, ANY, 1))
-            .unwrap_err()
-            .to_string();
+        let e = refused(&rectangles(9.0, 10.0, 300.0, ANY, 1));
         assert!(
             e.contains("item 7 (10 high at best") && e.contains("any rotation"),
             "{e}"
@@ -710,24 +711,20 @@ mod tests {
             r#""name": "t","#,
             r#""name": "t", "min_item_separation": 60,"#,
         );
-        let e = StripInstance::from_json(&sep).unwrap_err().to_string();
+        let e = refused(&sep);
         assert!(e.contains("less the separation 60"), "{e}");
     }
 
     #[test]
     fn demands_past_what_f32_and_memory_hold_are_refused_with_the_numbers() {
-        let e = StripInstance::from_json(&rectangles(5000.0, 3000.0, 2000.0, FIXED, 100_000_000))
-            .unwrap_err()
-            .to_string();
+        let e = refused(&rectangles(5000.0, 3000.0, 2000.0, FIXED, 100_000_000));
         assert!(
             e.contains("100000000 item copies") && e.contains("at most 100000"),
             "{e}"
         );
         // 20,000 copies of a 3 x 2 m plate: the construction's strip is 7.2e7 long, where
         // f32 numbers are 8 apart, 4e-3 of the plate's 2000
-        let e = StripInstance::from_json(&rectangles(5000.0, 3000.0, 2000.0, FIXED, 20_000))
-            .unwrap_err()
-            .to_string();
+        let e = refused(&rectangles(5000.0, 3000.0, 2000.0, FIXED, 20_000));
         assert!(
             e.contains("20000 item copies") && e.contains("are 8 apart"),
             "{e}"

@@ -385,6 +385,8 @@ pub fn read_dxf(bytes: &[u8], name: &str, options: &ReadOptions) -> Result<DxfPa
         what,
         entities: refs(srcs),
     };
+    // the first notes: what was skipped, one per layer, entity type and reason
+    let skipped_notes = got.skipped.len();
     for (map, prefix) in [(&got.skipped, "skipped"), (&got.converted, "")] {
         for ((layer, entity, why), handles) in map {
             notes.push(Note {
@@ -436,22 +438,14 @@ pub fn read_dxf(bytes: &[u8], name: &str, options: &ReadOptions) -> Result<DxfPa
             .iter()
             .map(|&s| got.sources[s].layer.as_str())
             .collect();
-        let near: Vec<Note> = got
-            .skipped
+        let near: Vec<Note> = notes[..skipped_notes]
             .iter()
-            .filter(|((layer, _, _), _)| layers.contains(&layer.as_str()))
-            .map(|((layer, entity, why), handles)| Note {
-                file: name.to_string(),
-                what: format!("skipped: {why}"),
-                entities: handles
+            .filter(|n| {
+                n.entities
                     .iter()
-                    .map(|h| EntityRef {
-                        layer: layer.clone(),
-                        entity: entity.to_string(),
-                        handle: h.clone(),
-                    })
-                    .collect(),
+                    .any(|e| layers.contains(&e.layer.as_str()))
             })
+            .cloned()
             .collect();
         if near.is_empty() {
             String::new()
