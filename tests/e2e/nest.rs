@@ -67,6 +67,21 @@ fn dxf_parts_nest_inside_the_sheet_and_open_contours_are_left_out() {
     let timings = read_json(&dir.join("n/timings.json"));
     assert_eq!(timings["nest_search"]["work_budget"], 100_000, "{timings}");
     assert_eq!(timings["nest_search"]["cut_by_time"], false, "{timings}");
+    // the budget is the search's and holds; the construction's evaluations are apart
+    let searched = timings["nest_search"]["evaluations"].as_u64().unwrap();
+    let constructed = timings["nest_search"]["construction_evaluations"]
+        .as_u64()
+        .unwrap();
+    assert!(searched <= 100_000 && constructed > 0, "{timings}");
+    assert!(
+        out.stdout.contains(&format!(
+            "{:.2} M evaluations (work budget 0.10 M, the construction's {:.2} M apart",
+            searched as f64 / 1e6,
+            constructed as f64 / 1e6
+        )),
+        "{}",
+        out.stdout
+    );
     assert!(num(&timings["total"], "total") >= num(&timings["nest"], "nest"));
     let lb = report["lower_bound_sheets"].as_u64().unwrap();
     assert!(lb as usize <= report["sheets"].as_array().unwrap().len());
@@ -142,6 +157,48 @@ fn strip_instance_reaches_a_real_density() {
     // above the jagua-rs lbf reference (70.32 %) in best_known_spp.csv
     assert!(density > 0.7032 && density < 1.0, "{density}");
     assert_eq!(r["placements"].as_array().unwrap().len(), 12);
+}
+
+/// A strip-packing instance whose construction does more evaluations than the whole work
+/// budget (161 copies, 2,000 evaluations): they are counted apart, and the search after it
+/// spends its budget exactly, as strip.json and the summary's search row say.
+#[test]
+fn a_strip_search_spends_its_budget_apart_from_the_construction() {
+    let dir = Dir::new();
+    let instance = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/datasets/nesting/spp/gardeyn6.json"
+    );
+    let out = dir.run(&[
+        "nest",
+        instance,
+        "--nest-evaluations",
+        "2000",
+        "--nest-seconds",
+        "600",
+        "--out",
+        "g",
+    ]);
+    out.expect_code(0);
+    let r = read_json(&dir.join("g/strip.json"));
+    assert_eq!(r["evaluations"], 2000, "{r}");
+    assert_eq!(r["work_budget"], 2000, "{r}");
+    assert_eq!(r["cut_by_time"], false, "{r}");
+    let constructed = r["construction_evaluations"].as_u64().unwrap();
+    assert!(constructed > 2000, "{constructed}");
+    let row = out
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("search"))
+        .unwrap_or_else(|| panic!("{}", out.stdout));
+    assert!(
+        row.ends_with(&format!(
+            "0.00 M evaluations (work budget 0.00 M, the construction's {:.2} M apart; the \
+             same layout on every machine)",
+            constructed as f64 / 1e6
+        )),
+        "{row}"
+    );
 }
 
 #[test]

@@ -347,10 +347,13 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
         rows.extend([
             vec![
                 "search".into(),
+                // (the construction cut or not, a search follows it in the time left)
                 crate::sheets::search_row(
                     result.evaluations,
                     result.work_budget.unwrap_or(result.evaluations) * options.searches as u64,
+                    result.construction_evaluations,
                     result.cut_by_time,
+                    true,
                     args.nest_seconds,
                 ),
             ],
