@@ -159,6 +159,50 @@ fn strip_instance_reaches_a_real_density() {
     assert_eq!(r["placements"].as_array().unwrap().len(), 12);
 }
 
+/// Two files with one stem in two directories: each file's parts are named by the stem
+/// and the directory (`a/part`, `b/part#1`, `b/part#2`), whatever the order of the files
+/// on the command line (the second file's parts were named by its path, `b/part.dxf#1`,
+/// and the first's by the stem alone, so that a file's ids hung on the order).
+#[test]
+fn files_that_share_a_stem_get_unique_ids_by_their_directory() {
+    let dir = Dir::new();
+    dir.write("a/part.dxf", dxf(&[(0.0, 400.0, 150.0)]));
+    dir.write(
+        "b/part.dxf",
+        dxf(&[(0.0, 300.0, 120.0), (1000.0, 500.0, 200.0)]),
+    );
+    let ids = |files: [&str; 2], out: &str| -> Vec<String> {
+        let args = [
+            "nest",
+            files[0],
+            files[1],
+            "--sheet",
+            "1200x600",
+            "--nest-evaluations",
+            "20000",
+            "--nest-seconds",
+            "3600",
+            "--out",
+            out,
+            "--quiet",
+        ];
+        dir.run(&args).expect_code(0);
+        let report = read_json(&dir.join(&format!("{out}/nest.json")));
+        let mut ids: Vec<String> = report["sheets"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|s| s["placements"].as_array().unwrap().iter())
+            .map(|p| p["strip"].as_str().unwrap().to_string())
+            .collect();
+        ids.sort();
+        ids
+    };
+    let expected = ["a/part", "b/part#1", "b/part#2"];
+    assert_eq!(ids(["a/part.dxf", "b/part.dxf"], "ab"), expected);
+    assert_eq!(ids(["b/part.dxf", "a/part.dxf"], "ba"), expected);
+}
+
 /// A strip-packing instance whose construction does more evaluations than the whole work
 /// budget (161 copies, 2,000 evaluations): they are counted apart, and the search after it
 /// spends its budget exactly, as strip.json and the summary's search row say.
