@@ -67,6 +67,21 @@ fn dxf_parts_nest_inside_the_sheet_and_open_contours_are_left_out() {
     let timings = read_json(&dir.join("n/timings.json"));
     assert_eq!(timings["nest_search"]["work_budget"], 100_000, "{timings}");
     assert_eq!(timings["nest_search"]["cut_by_time"], false, "{timings}");
+    // the budget is the search's and holds; the construction's evaluations are apart
+    let searched = timings["nest_search"]["evaluations"].as_u64().unwrap();
+    let constructed = timings["nest_search"]["construction_evaluations"]
+        .as_u64()
+        .unwrap();
+    assert!(searched <= 100_000 && constructed > 0, "{timings}");
+    assert!(
+        out.stdout.contains(&format!(
+            "{:.2} M evaluations (work budget 0.10 M, the construction's {:.2} M apart",
+            searched as f64 / 1e6,
+            constructed as f64 / 1e6
+        )),
+        "{}",
+        out.stdout
+    );
     assert!(num(&timings["total"], "total") >= num(&timings["nest"], "nest"));
     let lb = report["lower_bound_sheets"].as_u64().unwrap();
     assert!(lb as usize <= report["sheets"].as_array().unwrap().len());
@@ -142,6 +157,92 @@ fn strip_instance_reaches_a_real_density() {
     // above the jagua-rs lbf reference (70.32 %) in best_known_spp.csv
     assert!(density > 0.7032 && density < 1.0, "{density}");
     assert_eq!(r["placements"].as_array().unwrap().len(), 12);
+}
+
+/// Two files with one stem in two directories: each file's parts are named by the stem
+/// and the directory (`a/part`, `b/part#1`, `b/part#2`), whatever the order of the files
+/// on the command line (the second file's parts were named by its path, `b/part.dxf#1`,
+/// and the first's by the stem alone, so that a file's ids hung on the order).
+#[test]
+fn files_that_share_a_stem_get_unique_ids_by_their_directory() {
+    let dir = Dir::new();
+    dir.write("a/part.dxf", dxf(&[(0.0, 400.0, 150.0)]));
+    dir.write(
+        "b/part.dxf",
+        dxf(&[(0.0, 300.0, 120.0), (1000.0, 500.0, 200.0)]),
+    );
+    let ids = |files: [&str; 2], out: &str| -> Vec<String> {
+        let args = [
+            "nest",
+            files[0],
+            files[1],
+            "--sheet",
+            "1200x600",
+            "--nest-evaluations",
+            "20000",
+            "--nest-seconds",
+            "3600",
+            "--out",
+            out,
+            "--quiet",
+        ];
+        dir.run(&args).expect_code(0);
+        let report = read_json(&dir.join(&format!("{out}/nest.json")));
+        let mut ids: Vec<String> = report["sheets"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|s| s["placements"].as_array().unwrap().iter())
+            .map(|p| p["strip"].as_str().unwrap().to_string())
+            .collect();
+        ids.sort();
+        ids
+    };
+    let expected = ["a/part", "b/part#1", "b/part#2"];
+    assert_eq!(ids(["a/part.dxf", "b/part.dxf"], "ab"), expected);
+    assert_eq!(ids(["b/part.dxf", "a/part.dxf"], "ba"), expected);
+}
+
+/// A strip-packing instance whose construction does more evaluations than the whole work
+/// budget (161 copies, 2,000 evaluations): they are counted apart, and the search after it
+/// spends its budget exactly, as strip.json and the summary's search row say.
+#[test]
+fn a_strip_search_spends_its_budget_apart_from_the_construction() {
+    let dir = Dir::new();
+    let instance = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/datasets/nesting/spp/gardeyn6.json"
+    );
+    let out = dir.run(&[
+        "nest",
+        instance,
+        "--nest-evaluations",
+        "2000",
+        "--nest-seconds",
+        "600",
+        "--out",
+        "g",
+    ]);
+    out.expect_code(0);
+    let r = read_json(&dir.join("g/strip.json"));
+    assert_eq!(r["evaluations"], 2000, "{r}");
+    assert_eq!(r["work_budget"], 2000, "{r}");
+    assert_eq!(r["cut_by_time"], false, "{r}");
+    let constructed = r["construction_evaluations"].as_u64().unwrap();
+    assert!(constructed > 2000, "{constructed}");
+    let row = out
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("search"))
+        .unwrap_or_else(|| panic!("{}", out.stdout));
+    assert!(
+        row.ends_with(&format!(
+            "0.00 M evaluations (work budget 0.00 M, the construction's {:.2} M apart; the \
+             same layout on every machine)",
+            constructed as f64 / 1e6
+        )),
+        "{row}"
+    );
 }
 
 #[test]

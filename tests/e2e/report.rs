@@ -57,6 +57,46 @@ fn perimeter(v: &[[f64; 3]]) -> f64 {
         .sum()
 }
 
+/// Extent along x and y of a closed polyline with bulges, arcs included: each arc adds
+/// the points where it crosses its circle's axis directions. An arc from a to b of bulge
+/// k (sweep 4 atan k, counter-clockwise when positive) has its centre at the chord's
+/// middle plus (1 - k^2) / (4 k) times the chord turned a quarter left.
+fn extent(v: &[[f64; 3]]) -> [f64; 2] {
+    let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+    let mut take = |x: f64, y: f64| {
+        lo = [lo[0].min(x), lo[1].min(y)];
+        hi = [hi[0].max(x), hi[1].max(y)];
+    };
+    for i in 0..v.len() {
+        let (a, b, k) = (v[i], v[(i + 1) % v.len()], v[i][2]);
+        take(a[0], a[1]);
+        if k == 0.0 {
+            continue;
+        }
+        let f = (1.0 - k * k) / (4.0 * k);
+        let (cx, cy) = (
+            0.5 * (a[0] + b[0]) - f * (b[1] - a[1]),
+            0.5 * (a[1] + b[1]) + f * (b[0] - a[0]),
+        );
+        let r = (a[0] - cx).hypot(a[1] - cy);
+        let start = (a[1] - cy).atan2(a[0] - cx);
+        let sweep = 4.0 * k.atan();
+        let tau = std::f64::consts::TAU;
+        for quarter in 0..4 {
+            let angle = quarter as f64 * tau / 4.0;
+            let along = if sweep > 0.0 {
+                (angle - start).rem_euclid(tau)
+            } else {
+                (start - angle).rem_euclid(tau)
+            };
+            if along <= sweep.abs() {
+                take(cx + r * angle.cos(), cy + r * angle.sin());
+            }
+        }
+    }
+    [hi[0] - lo[0], hi[1] - lo[1]]
+}
+
 /// Area enclosed by a closed contour `[[x, y, bulge], ...]` (absolute): the polygon of its
 /// vertices (shoelace) plus, per arc, the signed circular segment between chord and arc.
 fn area(v: &[Value]) -> f64 {
@@ -98,8 +138,9 @@ struct Expected {
     pierces: usize,
     hub_welds: usize,
     primary_welds: usize,
-    /// per strip id: (cut length from its DXF, pierces, area from its contours)
-    per_strip: HashMap<String, (f64, usize, f64)>,
+    /// per strip id: (cut length from its DXF, pierces, area from its contours, the
+    /// extent of its DXF outline along x and y)
+    per_strip: HashMap<String, (f64, usize, f64, [f64; 2])>,
 }
 
 fn expected(out: &Path) -> Expected {
@@ -133,7 +174,12 @@ fn expected(out: &Path) -> Expected {
             "{id}"
         );
         let length: f64 = cut.iter().map(|p| perimeter(&p.vertices)).sum();
-        per_strip.insert(id, (length, cut.len(), outline - holes));
+        let size = cut
+            .iter()
+            .find(|p| p.layer == "OUTSIDE")
+            .map(|p| extent(&p.vertices))
+            .unwrap();
+        per_strip.insert(id, (length, cut.len(), outline - holes, size));
     }
     // welds: every link a hub weld; a primary weld where the two units are in different
     // strips (labels in frame.json)
@@ -336,10 +382,19 @@ fn bill_of_materials_has_one_row_per_strip() {
         assert_eq!(row[0], id);
         assert!(seen.insert(id.to_string()));
         let f = |k: usize| -> f64 { row[k].parse().unwrap_or_else(|_| panic!("{row:?}")) };
-        let (cut, pierces, area) = want.per_strip[id];
+        let (cut, pierces, area, size_as_cut) = want.per_strip[id];
         assert!((f(8) - area).abs() <= 0.05 + 1e-9 * area, "{id} area");
         assert!((f(9) - cut).abs() <= 0.05 + 1e-9 * cut, "{id} cut length");
         assert_eq!(f(10), pierces as f64, "{id} pierces");
+        // the size of the part as cut: its outline in strips/ID.dxf, arcs included (it
+        // was the nominal tiles' rectangle, up to 0.71 mm larger); strips.json says the same
+        assert!(
+            (f(6) - size_as_cut[0]).abs() <= 0.05 + 1e-9
+                && (f(7) - size_as_cut[1]).abs() <= 0.05 + 1e-9,
+            "{id}: bom.csv {} x {}, the DXF outline {size_as_cut:?}",
+            row[6],
+            row[7]
+        );
         let size = strip["size_mm"].as_array().unwrap();
         assert!((f(6) - num(&size[0], "l")).abs() <= 0.05);
         assert!((f(7) - num(&size[1], "w")).abs() <= 0.05);

@@ -115,6 +115,65 @@ struct NestTimings<'a> {
     nest_search: &'a sv_nest::SearchReport,
 }
 
+/// The id of each DXF file's parts (docs/dxf.md, "Part ids"): its stem (`A01` for
+/// `strips/A01.dxf`); where files share a stem, each of them is named by its stem and
+/// as many of its parent directories as tell it from every other file of that stem
+/// (`a/part` and `b/part` for `x/a/part.dxf` and `b/part.dxf`), with `/` between them on
+/// every system, so that the id does not depend on the order of the files. Files whose
+/// paths tell them from none (the same file given twice) are told apart by
+/// [`make_unique`].
+fn file_ids(paths: &[std::path::PathBuf]) -> Vec<String> {
+    // the path's names from the stem up: ["part", "a", "x"] for `x/a/part.dxf`
+    let names = |path: &Path| -> Vec<String> {
+        let Some(stem) = path.file_stem().filter(|s| !s.is_empty()) else {
+            return vec![path.display().to_string()];
+        };
+        let stem = stem.to_string_lossy().into_owned();
+        let parents = path.parent().into_iter().flat_map(|p| {
+            p.components().rev().filter_map(|c| match c {
+                std::path::Component::Normal(n) => Some(n.to_string_lossy().into_owned()),
+                _ => None,
+            })
+        });
+        std::iter::once(stem).chain(parents).collect()
+    };
+    let all: Vec<Vec<String>> = paths.iter().map(|p| names(p)).collect();
+    all.iter()
+        .map(|mine| {
+            // the fewest names that no other file of the stem ends with as well
+            let others: Vec<&Vec<String>> = all
+                .iter()
+                .filter(|o| *o != mine && o[0] == mine[0])
+                .collect();
+            let depth = (1..=mine.len())
+                .find(|&d| others.iter().all(|o| o.get(..d) != mine.get(..d)))
+                .unwrap_or(mine.len());
+            let mut id: Vec<&str> = mine[..depth].iter().map(String::as_str).collect();
+            id.reverse();
+            id.join("/")
+        })
+        .collect()
+}
+
+/// Makes the ids unique: an id that an earlier one has already gets `~2`, `~3`, ... (in
+/// the order given), so that no two parts share one: the same file given twice, or a file
+/// whose stem is another file's part id (`part#1.dxf` beside a `part.dxf` of two parts).
+fn make_unique<'a>(ids: impl Iterator<Item = &'a mut String>) {
+    let mut seen: std::collections::HashSet<String> = std::collections::HashSet::new();
+    for id in ids {
+        if !seen.contains(id.as_str()) {
+            seen.insert(id.clone());
+            continue;
+        }
+        let unique = (2..)
+            .map(|k| format!("{id}~{k}"))
+            .find(|c| !seen.contains(c))
+            .expect("a free suffix");
+        seen.insert(unique.clone());
+        *id = unique;
+    }
+}
+
 /// Run `nest`.
 pub fn run(args: &NestArgs) -> Result<()> {
     let started = Instant::now();
@@ -139,8 +198,8 @@ pub fn run(args: &NestArgs) -> Result<()> {
     let mut parts: Vec<SheetPart> = Vec::new();
     let mut left_out: Vec<LeftOut> = Vec::new();
     let mut notes: Vec<sv_dxf::Note> = Vec::new();
-    let mut stems: std::collections::HashSet<String> = std::collections::HashSet::new();
-    for path in &args.parts {
+    let ids = file_ids(&args.parts);
+    for (path, id) in args.parts.iter().zip(&ids) {
         let name = path.display().to_string();
         let bytes = match output::read_bytes(path) {
             Ok(bytes) => bytes,
@@ -152,15 +211,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
                 continue;
             }
         };
-        // the part id is the file stem (`A01` for `strips/A01.dxf`), or the path when two
-        // files share a stem
-        let stem = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .filter(|s| !stems.contains(s) && !s.is_empty())
-            .unwrap_or_else(|| name.clone());
-        stems.insert(stem.clone());
-        match sv_dxf::read_dxf(&bytes, &stem, &read_options) {
+        match sv_dxf::read_dxf(&bytes, id, &read_options) {
             Ok(read) => {
                 // the parts with what they etch (labels and fold marks of a strip DXF)
                 parts.extend(read.parts.into_iter().map(|p| SheetPart {
@@ -200,6 +251,7 @@ pub fn run(args: &NestArgs) -> Result<()> {
             }),
         }
     }
+    make_unique(parts.iter_mut().map(|p| &mut p.part.id));
     if parts.is_empty() {
         // the first reason, naming the file unless it does already
         let why = left_out
@@ -347,10 +399,13 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
         rows.extend([
             vec![
                 "search".into(),
+                // (the construction cut or not, a search follows it in the time left)
                 crate::sheets::search_row(
                     result.evaluations,
                     result.work_budget.unwrap_or(result.evaluations) * options.searches as u64,
+                    result.construction_evaluations,
                     result.cut_by_time,
+                    true,
                     args.nest_seconds,
                 ),
             ],
@@ -364,6 +419,33 @@ fn run_strip(args: &NestArgs, path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn files_that_share_a_stem_are_told_apart_by_their_directories() {
+        let ids = |paths: &[&str]| {
+            let paths: Vec<std::path::PathBuf> = paths.iter().map(Into::into).collect();
+            let mut ids = file_ids(&paths);
+            make_unique(ids.iter_mut());
+            ids
+        };
+        assert_eq!(ids(&["strips/A01.dxf", "strips/A02.dxf"]), ["A01", "A02"]);
+        assert_eq!(ids(&["a/part.dxf", "b/part.dxf"]), ["a/part", "b/part"]);
+        // the order of the files does not change a file's id
+        assert_eq!(ids(&["b/part.dxf", "a/part.dxf"]), ["b/part", "a/part"]);
+        assert_eq!(
+            ids(&["/x/a/part.dxf", "y/a/part.dxf", "b/part.DXF", "other.dxf"]),
+            ["x/a/part", "y/a/part", "b/part", "other"]
+        );
+        assert_eq!(ids(&["part.dxf", "sub/part.dxf"]), ["part", "sub/part"]);
+        // the same file twice: told apart by order
+        assert_eq!(
+            ids(&["a/part.dxf", "./a/part.dxf", "b/part.dxf"]),
+            ["a/part", "a/part~2", "b/part"]
+        );
+        let mut taken = vec!["part#1".to_string(), "part#2".into(), "part#1".into()];
+        make_unique(taken.iter_mut());
+        assert_eq!(taken, ["part#1", "part#2", "part#1~2"]);
+    }
 
     #[test]
     fn sheet_sizes_parse_and_bad_ones_name_the_flag() {

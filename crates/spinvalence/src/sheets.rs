@@ -138,23 +138,43 @@ pub fn run(
     })
 }
 
-/// The `search` row of a summary: the work done against the budget, and whether the time
-/// cap cut it (then the layout may differ from a run on a faster or less busy machine).
-pub fn search_row(evaluations: u64, budget: u64, cut: bool, seconds: f64) -> String {
+/// The `search` row of a summary: the search's evaluations against its work budget (the
+/// construction's are counted apart: the budget is the search's alone, and never overrun),
+/// and whether the time cap cut it (then the layout may differ on a faster or less busy
+/// machine). `searched` is false when the time cap stopped the construction and no search
+/// followed.
+pub fn search_row(
+    evaluations: u64,
+    budget: u64,
+    construction: u64,
+    cut: bool,
+    searched: bool,
+    seconds: f64,
+) -> String {
     let m = |n: u64| format!("{:.2} M", n as f64 / 1e6);
-    if cut {
+    if !searched {
         format!(
-            "cut by the {seconds} s time cap at {:.0} % of its work budget ({} of {} evaluations): \
-             the layout may differ on a faster or less busy machine",
-            100.0 * (evaluations as f64 / budget.max(1) as f64).min(1.0),
-            m(evaluations),
+            "none: the {seconds} s time cap stopped the construction first (after {} \
+             evaluations; work budget {})",
+            m(construction),
             m(budget)
+        )
+    } else if cut {
+        format!(
+            "cut by the {seconds} s time cap at {:.0} % of its work budget ({} of {} evaluations, \
+             the construction's {} apart): the layout may differ on a faster or less busy machine",
+            100.0 * evaluations as f64 / budget.max(1) as f64,
+            m(evaluations),
+            m(budget),
+            m(construction)
         )
     } else {
         format!(
-            "{} evaluations (work budget {}, the same layout on every machine)",
+            "{} evaluations (work budget {}, the construction's {} apart; the same layout on \
+             every machine)",
             m(evaluations),
-            m(budget)
+            m(budget),
+            m(construction)
         )
     }
 }
@@ -236,7 +256,9 @@ pub fn summary_rows(report: &NestReport, seconds: f64) -> Vec<Vec<String>> {
         search_row(
             report.search.evaluations,
             report.search.work_budget,
+            report.search.construction_evaluations,
             report.search.cut_by_time,
+            !report.search.construction_cut,
             seconds,
         ),
     ]);
@@ -283,7 +305,35 @@ pub fn left_out_groups(left_out: &[LeftOut]) -> Vec<(String, &str)> {
 
 #[cfg(test)]
 mod tests {
-    use super::slowdown_from_loadavg;
+    use super::{search_row, slowdown_from_loadavg};
+
+    /// The search row never puts the construction's evaluations against the search's
+    /// budget: after a construction the clock stopped there was no search, and the row
+    /// says so instead of a share of the budget (it read "at 100 % of its work budget
+    /// (0.65 M of 0.33 M)").
+    #[test]
+    fn the_search_row_counts_the_construction_apart() {
+        let none = search_row(0, 330_000, 650_000, true, false, 5.0);
+        assert_eq!(
+            none,
+            "none: the 5 s time cap stopped the construction first (after 0.65 M \
+             evaluations; work budget 0.33 M)"
+        );
+        let cut = search_row(165_000, 330_000, 650_000, true, true, 5.0);
+        assert!(
+            cut.starts_with(
+                "cut by the 5 s time cap at 50 % of its work budget (0.17 M of 0.33 M \
+                 evaluations, the construction's 0.65 M apart)"
+            ),
+            "{cut}"
+        );
+        let full = search_row(330_000, 330_000, 650_000, false, true, 5.0);
+        assert_eq!(
+            full,
+            "0.33 M evaluations (work budget 0.33 M, the construction's 0.65 M apart; the \
+             same layout on every machine)"
+        );
+    }
 
     #[test]
     fn the_load_per_core_slows_the_machine_and_a_quiet_one_is_not_faster() {

@@ -45,10 +45,16 @@ pub(crate) const WORK_SHARE_OF_TIME: f64 = 0.4;
 /// decides how far the search goes, so that its result is a function of the input, the
 /// options and the seed; the wall clock only caps it. Without a work budget the clock
 /// decides (for benchmarks at equal time: not reproducible).
+///
+/// An evaluation is one candidate placement of a shape tested against a layout (a sample
+/// or a descent step of an insertion or a move), counted by [`Budget::spend`], which
+/// refuses it once the work is spent: a search never does more evaluations than its
+/// budget, even in the middle of a move (the candidates it refuses are not taken).
 pub(crate) struct Budget {
     start: Instant,
     limit: Duration,
     work: Option<u64>,
+    /// evaluations done (only [`Budget::spend`] and [`Budget::add_helpers`] count them)
     pub evals: u64,
     /// set when the clock, not the work budget, stopped the search
     cut: std::cell::Cell<bool>,
@@ -102,10 +108,34 @@ impl Budget {
     pub fn work(&self) -> Option<u64> {
         self.work
     }
-    /// A budget for a helper thread of this search: the same clock, no work limit of its
-    /// own (its evaluations are added to this one's by the caller).
-    pub fn helper(&self) -> Budget {
-        Budget::new(self.start, self.limit, None)
+    /// One evaluation: `true` and counted while the work budget has one left, `false` (and
+    /// not counted) once it is spent. Without a work budget always `true`.
+    pub fn spend(&mut self) -> bool {
+        if self.work.is_some_and(|w| self.evals >= w) {
+            return false;
+        }
+        self.evals += 1;
+        true
+    }
+    /// Budgets for `n` helper threads of this search: the same clock, and the work this
+    /// one has left split between them (the first ones get the remainder), so that their
+    /// evaluations together never overrun it whatever each does; a share is a function of
+    /// the work done, never of the threads' timing. Without a work budget none of their own.
+    pub fn helpers(&self, n: usize) -> Vec<Budget> {
+        let n = n.max(1) as u64;
+        (0..n)
+            .map(|k| {
+                let share = self.work.map(|w| {
+                    let left = w.saturating_sub(self.evals);
+                    left / n + u64::from(k < left % n)
+                });
+                Budget::new(self.start, self.limit, share)
+            })
+            .collect()
+    }
+    /// Counts the evaluations of the helpers made by [`Budget::helpers`].
+    pub fn add_helpers(&mut self, helper_evals: impl Iterator<Item = u64>) {
+        self.evals += helper_evals.sum::<u64>();
     }
     /// Whether the clock cut the search short of its work budget.
     pub fn was_cut(&self) -> bool {
@@ -693,7 +723,10 @@ impl Bin {
         let mut best: Option<((f32, f32, f32), DTransformation)> = None;
         let cde = self.layout.cde();
         let feasible = |dt: &DTransformation, buf: &mut SPolygon, budget: &mut Budget| {
-            budget.evals += 1;
+            // a candidate the spent budget refuses is not taken
+            if !budget.spend() {
+                return false;
+            }
             buf.transform_from(item.shape_cd(), &dt.compose());
             !cde.detect_poly_collision(buf, &NoFilter)
         };
@@ -941,7 +974,10 @@ impl Bin {
         // a place partly outside the container is evaluated as it is: the exterior's
         // overlap keeps the descent inside (sparrow)
         let mut evaluate = |dt: DTransformation, upper: f32| {
-            budget.evals += 1;
+            // a candidate the spent budget refuses costs too much to be taken
+            if !budget.spend() {
+                return f32::INFINITY;
+            }
             buf.transform_from(item.shape_cd(), &dt.compose());
             self.eval(i, &buf, Some(gls), upper, probe)
         };
@@ -1121,7 +1157,7 @@ impl Bin {
             c.follow(self);
         }
         // on the thread pool (no thread started per pass); in worker order
-        let budgets: Vec<Budget> = (0..self.workers).map(|_| budget.helper()).collect();
+        let budgets = budget.helpers(self.workers);
         let mut bins: Vec<&mut Bin> = std::iter::once(&mut *self)
             .chain(copies.iter_mut())
             .collect();
@@ -1132,7 +1168,7 @@ impl Bin {
             .map(|((bin, &seed), b)| run(bin, seed, b))
             .collect();
         drop(bins);
-        budget.evals += passes.iter().map(|p| p.evals).sum::<u64>();
+        budget.add_helpers(passes.iter().map(|p| p.evals));
         let best = (1..passes.len()).fold(0, |b, k| {
             if passes[k].loss < passes[b].loss {
                 k

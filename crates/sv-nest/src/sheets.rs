@@ -229,12 +229,15 @@ pub struct LeftOut {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct SearchReport {
-    /// the work budget (collision evaluations) that decides the layout
+    /// the work budget (collision evaluations) of the search after the construction, which
+    /// decides the layout: an evaluation is one candidate placement of a part tested
+    /// against a sheet's layout (a sample or a descent step)
     pub work_budget: u64,
-    /// collision evaluations the search did (all searches together)
+    /// collision evaluations the search did (all searches together): never more than
+    /// `work_budget`, the construction's not included
     pub evaluations: u64,
-    /// collision evaluations of the construction before it (never cut short: every part is
-    /// placed once)
+    /// collision evaluations of the construction before the search, counted apart from the
+    /// work budget (not cut short by the work: every part is placed once)
     pub construction_evaluations: u64,
     /// whether the wall-clock cap stopped the search before its work budget was spent, or
     /// the construction before every part was placed: the layout may then differ from a
@@ -527,9 +530,10 @@ pub fn nest_sheets(
                 density: if used > 0.0 { area / used } else { 0.0 },
             });
         };
-    // the searches, side by side; each gets its share of the work
+    // the searches, side by side; each gets its share of the work (the first ones the
+    // remainder), so that together they do at most `work` evaluations
     let searches = DEFAULT_SEARCHES as u64;
-    let share = work / searches;
+    let share = |k: u64| work / searches + u64::from(k < work % searches);
     let others = rest.len();
     let results: Vec<Searched> = if !searching {
         // the clock ran out before the search could start
@@ -541,7 +545,7 @@ pub fn nest_sheets(
                     let mut mine = window.clone();
                     let seed = opts.seed ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15);
                     scope.spawn(move || {
-                        let mut b = Budget::new(started, opts.time_limit, Some(share));
+                        let mut b = Budget::new(started, opts.time_limit, Some(share(k)));
                         let mut r = Rng64::seed_from_u64(seed);
                         improve(&mut mine, others, lb, &mut r, &mut b, opts, &mut |_, _| {});
                         (mine, b.evals, b.was_cut())
@@ -549,7 +553,7 @@ pub fn nest_sheets(
                 })
                 .collect();
             let mut first = window.clone();
-            let mut b = Budget::new(started, opts.time_limit, Some(share));
+            let mut b = Budget::new(started, opts.time_limit, Some(share(0)));
             improve(
                 &mut first,
                 others,

@@ -340,9 +340,15 @@ pub struct StripResult {
     pub density: f64,
     /// one placement per demanded item copy
     pub placements: Vec<StripPlacement>,
-    /// collision evaluations used
+    /// collision evaluations of the search (all searches together; never more than the
+    /// work budget of each times the searches), the construction's not included
     pub evaluations: u64,
-    /// the work budget of each search (`None` when the clock decided)
+    /// collision evaluations of the construction (all searches together), counted apart
+    /// from the work budget: it places every copy once, unless the clock stops it
+    #[serde(default)]
+    pub construction_evaluations: u64,
+    /// the work budget of each search after the construction, in collision evaluations
+    /// (candidate placements tested; `None` when the clock decided)
     pub work_budget: Option<u64>,
     /// whether the wall-clock cap stopped a search short of its work budget (the layout
     /// may then differ from a run on a faster or less busy machine)
@@ -390,16 +396,19 @@ pub fn nest_strip(
             .collect();
         let mut best = nest_strip_one(inst, opts, progress);
         let mut evaluations = best.evaluations;
+        let mut construction_evaluations = best.construction_evaluations;
         let mut cut = best.cut_by_time;
         for h in others {
             let r = h.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
             evaluations += r.evaluations;
+            construction_evaluations += r.construction_evaluations;
             cut |= r.cut_by_time;
             if r.length < best.length {
                 best = r;
             }
         }
         best.evaluations = evaluations;
+        best.construction_evaluations = construction_evaluations;
         best.cut_by_time = cut;
         best
     })
@@ -423,7 +432,10 @@ fn nest_strip_one(
     progress: &mut dyn FnMut(&Progress),
 ) -> StripResult {
     let mut rng = Rng64::seed_from_u64(opts.seed);
-    let mut budget = Budget::new(Instant::now(), opts.time_limit, opts.max_evaluations);
+    let started = Instant::now();
+    // the construction places every copy once, whatever the work: its evaluations are
+    // counted apart from the search's work budget (the clock alone caps it)
+    let mut construction = Budget::new(started, opts.time_limit, None);
     let mut in_columns = 0;
     let sep = inst.min_item_separation;
     let h = inst.height;
@@ -453,7 +465,7 @@ fn nest_strip_one(
     let deadline = opts.time_limit.mul_f64(CONSTRUCTION_SHARE);
     let mut columns = Columns::new(inset, h - inset);
     for (n, (inst_idx, item)) in copies.iter().enumerate() {
-        if budget.clock_passed(deadline) {
+        if construction.clock_passed(deadline) {
             // the clock caps the construction: the copies left go in columns of their
             // bounding boxes right of the others, which takes no collision test
             for (inst_idx, item) in &copies[n..] {
@@ -464,8 +476,14 @@ fn nest_strip_one(
         }
         let x_limit = front + item.shape_cd().diameter();
         let dt = bin
-            .blf_position(item, opts.construct_samples, x_limit, &mut rng, &mut budget)
-            .or_else(|| bin.blf_position(item, 4000, f32::MAX, &mut rng, &mut budget));
+            .blf_position(
+                item,
+                opts.construct_samples,
+                x_limit,
+                &mut rng,
+                &mut construction,
+            )
+            .or_else(|| bin.blf_position(item, 4000, f32::MAX, &mut rng, &mut construction));
         match dt {
             Some(dt) => {
                 bin.add(*inst_idx, item, dt);
@@ -492,6 +510,7 @@ fn nest_strip_one(
     };
     let mut best_len = fit(&mut bin);
     let mut best = bin.save();
+    let mut budget = Budget::new(started, opts.time_limit, opts.max_evaluations);
     let report = |len: f32, budget: &Budget, progress: &mut dyn FnMut(&Progress)| {
         progress(&Progress {
             elapsed_s: budget.elapsed().as_secs_f64(),
@@ -571,8 +590,10 @@ fn nest_strip_one(
         density: density_of(best_len),
         placements: placements.into_iter().map(|p| p.1).collect(),
         evaluations: budget.evals,
+        construction_evaluations: construction.evals,
         work_budget: budget.work(),
-        cut_by_time: budget.was_cut(),
+        // (with a work budget, a construction the clock stopped cut the run short too)
+        cut_by_time: budget.was_cut() || (in_columns > 0 && budget.work().is_some()),
         items_in_columns: in_columns,
         elapsed_s: budget.elapsed().as_secs_f64(),
     }

@@ -296,12 +296,52 @@ fn a_busy_machine_gets_the_same_layout() {
     assert_eq!(quiet_strip.length, busy_strip.length);
     assert!(!quiet_strip.cut_by_time && !busy_strip.cut_by_time);
     assert_eq!(quiet_strip.work_budget, Some(20_000));
-    // the search spent its work, give or take the last move pass
-    assert!(
-        quiet_strip.evaluations >= 20_000 && quiet_strip.evaluations < 22_000,
-        "{}",
-        quiet_strip.evaluations
-    );
+    // the search spent its work exactly, the construction's counted apart
+    assert_eq!(quiet_strip.evaluations, 20_000);
+    assert!(quiet_strip.construction_evaluations > 0);
+}
+
+/// The work budget is the search's, after the construction, and holds exactly: the last
+/// move or insertion stops at the budget's last evaluation (the workers of a move pass
+/// share what is left), so the searches together never do more, whatever the budget (odd
+/// ones too: the two searches split it with the remainder to the first). The strip
+/// search spends its budget to the last evaluation, however many the construction did
+/// (here more than the whole budget: they are counted apart).
+#[test]
+fn the_search_holds_its_work_budget_exactly() {
+    let parts: Vec<Part> = test_parts().into_iter().take(14).collect();
+    for work in [7_001, 30_000, 45_555] {
+        let opts = NestOptions {
+            max_evaluations: Some(work),
+            ..small_opts()
+        };
+        let r = nest_sheets(&parts, &opts, &mut |_| {}).unwrap();
+        assert_eq!(r.search.work_budget, work);
+        assert!(
+            r.search.evaluations <= work && r.search.evaluations > work / 2,
+            "{work}: {:?}",
+            r.search
+        );
+        assert!(r.search.construction_evaluations > 0 && !r.search.cut_by_time);
+    }
+    let inst = StripInstance::read(&dataset("jakobs1")).unwrap();
+    for (work, workers) in [(3_001, 2), (12_345, 2), (10_000, 1)] {
+        let so = StripOptions {
+            time_limit: Duration::from_secs(600),
+            max_evaluations: Some(work),
+            searches: 1,
+            workers,
+            ..StripOptions::default()
+        };
+        let r = nest_strip(&inst, &so, &mut |_| {});
+        assert_eq!(r.evaluations, work, "{workers} workers");
+        assert!(
+            r.construction_evaluations > 3_001,
+            "{}",
+            r.construction_evaluations
+        );
+        assert!(!r.cut_by_time);
+    }
 }
 
 /// A time cap the construction cannot meet (none at all, so this does not depend on the

@@ -57,7 +57,8 @@ pub struct StripRecord {
     pub cuts: Vec<Contour>,
     /// Net part area (mm^2).
     pub area_mm2: f64,
-    /// Extra: length and width of the strip's bounding rectangle (mm).
+    /// Extra: length and width of the part as cut (mm): its outline's extent along x and y
+    /// of the strip's frame ([`crate::StripProfile::size`]).
     pub size_mm: [f64; 2],
     /// Extra: frame unit of each cut.
     pub cut_units: Vec<usize>,
@@ -131,7 +132,7 @@ impl StripsFile {
                 outline: p.outline.clone(),
                 cuts: p.cuts.clone(),
                 area_mm2: p.area,
-                size_mm: s.size,
+                size_mm: p.size(),
                 cut_units: p.cut_units.clone(),
                 pins: s
                     .pins

@@ -82,6 +82,18 @@ pub struct StripProfile {
     pub area: f64,
 }
 
+impl StripProfile {
+    /// Length and width of the part as cut (mm): the extent of its outline, arcs included,
+    /// along x and y of the strip's frame (the frame of `strips/ID.dxf`, long side on x).
+    /// The nominal tiles' rectangle ([`crate::FlatStrip::size`]) is larger by the rounds
+    /// of the tiles' corners.
+    pub fn size(&self) -> [f64; 2] {
+        self.outline
+            .bounds()
+            .map_or([0.0, 0.0], |(lo, hi)| [hi[0] - lo[0], hi[1] - lo[1]])
+    }
+}
+
 fn p2a(p: Point2) -> [f64; 2] {
     [p.x, p.y]
 }

@@ -14,7 +14,8 @@
 //! | no corner (oval, disc) | O-grid: an inner quad and a ring of four faces | four of valence 3 |
 //! | 3 or 5+ convex corners (triangle, pentagon) | one face per corner around a centre | the centre, valence = corners |
 //! | 5 convex corners and one reflex (L) | three faces meeting at the reflex corner | none (the reflex corner has three faces) |
-//! | two boundary loops (annulus) | a ring of eight faces | none |
+//! | two boundary loops, one inside the other in plan (annulus) | a ring of eight faces | none |
+//! | two boundary loops side by side or one over the other (a tube) | a ring of eight faces along it | none |
 //!
 //! Everything else (four corners, one or two corners, several reflex corners) goes to
 //! the four-corner grid.
@@ -88,7 +89,14 @@ pub(crate) fn coarse_layout(index: &TargetIndex<'_>) -> Result<Option<QuadMesh>,
     let v = &index.mesh.vertices;
     match index.loops.len() {
         1 => {}
-        2 => return Ok(Some(ring(index))),
+        2 => {
+            let ring = if loops_nested_in_plan(index) {
+                ring(index)
+            } else {
+                tube(index)
+            };
+            return Ok(Some(ring));
+        }
         n => {
             return Err(SurfaceError::NeedsLayout(format!(
                 "the target has {n} boundary loops (a roof with {} courtyards); the automatic layout handles one or two: give the layout as a coarse quad mesh (--layout COARSE.obj, [surface] layout)",
@@ -201,6 +209,71 @@ fn o_grid(index: &TargetIndex<'_>) -> QuadMesh {
     if n == 4 {
         faces.push([4, 5, 6, 7]);
     }
+    QuadMesh { vertices, faces }
+}
+
+/// Share of the outer loop's area in plan below which a second loop inside it is a hole
+/// (a courtyard); above it the two loops are the ends of a tube (an open cylinder standing
+/// with its rims one over the other has equal areas in plan).
+const HOLE_AREA_SHARE: Real = 0.9;
+
+/// Whether the second boundary loop lies inside the first seen in plan (along the normal
+/// of the target's plane), as a courtyard does in a roof, rather than across the surface
+/// from it, as the two rims of a tube do.
+fn loops_nested_in_plan(index: &TargetIndex<'_>) -> bool {
+    let v = &index.mesh.vertices;
+    let frame = crate::param::target_frame(index.mesh);
+    let plan = |lp: &[usize]| -> Vec<[Real; 2]> {
+        lp.iter()
+            .map(|&i| {
+                let d = v[i] - frame.centre;
+                [d.dot(&frame.d1), d.dot(&frame.d2)]
+            })
+            .collect()
+    };
+    let (outer, inner) = (plan(&index.loops[0]), plan(&index.loops[1]));
+    let area = |p: &[[Real; 2]]| sv_geom::planar::polygon_area(p).abs();
+    area(&inner) < HOLE_AREA_SHARE * area(&outer)
+        && inner
+            .iter()
+            .all(|&p| sv_geom::planar::point_in_polygon(p, &outer))
+}
+
+/// Ring of [`RING_FACES`] faces along a tube (two loops across the surface from each
+/// other, an open cylinder standing or lying): points evenly by arc length on the first
+/// loop, each joined to the point of the second at the same share of its length, run the
+/// other way (each loop has the surface on its left), turned to the start that makes the
+/// joins shortest (the rulings of a cylinder). No irregular vertex and no corner.
+fn tube(index: &TargetIndex<'_>) -> QuadMesh {
+    let v = &index.mesh.vertices;
+    let (first, second) = (&index.loops[0], &index.loops[1]);
+    let (arc1, arc2) = (loop_arc(v, first), loop_arc(v, second));
+    let (len1, len2) = (arc1[first.len()], arc2[second.len()]);
+    let n = RING_FACES;
+    let rim: Vec<Point3> = (0..n)
+        .map(|k| loop_at(v, first, &arc1, len1 * k as Real / n as Real))
+        .collect();
+    let across = |start: Real| -> Vec<Point3> {
+        (0..n)
+            .map(|k| loop_at(v, second, &arc2, start - len2 * k as Real / n as Real))
+            .collect()
+    };
+    let joins = |other: &[Point3]| -> Real {
+        rim.iter()
+            .zip(other)
+            .map(|(a, b)| (a - b).norm_squared())
+            .sum()
+    };
+    // the start on the second loop: each of its vertices tried
+    let start = (0..second.len())
+        .map(|k| arc2[k])
+        .min_by(|&a, &b| joins(&across(a)).total_cmp(&joins(&across(b))))
+        .unwrap_or(0.0);
+    let mut vertices = rim;
+    vertices.extend(across(start));
+    let faces = (0..n)
+        .map(|k| [k, (k + 1) % n, n + (k + 1) % n, n + k])
+        .collect();
     QuadMesh { vertices, faces }
 }
 
