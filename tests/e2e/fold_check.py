@@ -35,8 +35,10 @@ Checks
      at the end of their sides away from the bridge.
   7. hub plates at their laps lie one on the other: over the overlap of the two
      hub plates (seen along one's normal) the height of one mid-plane over the
-     other stays >= t (or <= -t); how far from it, <= 0.1 mm.  Informational:
-     the widest gap between the two over a lap, and how deep each leg's centre
+     other stays >= t (or <= -t); how far from it, <= 0.1 mm.  Where frame.json
+     says params.hub_laps_touch, the closest gap between the two over every lap
+     <= 1.5 mm (they touch somewhere).  Informational: the widest gap between the
+     two over a lap, the closest elsewhere, and how deep each leg's centre
      line (hub neck to rim neck) runs into the neighbour's hub plate there, and how
      deep the lower plate's cuts (the relief for that leg) reach under the upper plate.
 
@@ -508,6 +510,22 @@ def lap_heights(A, B):
         X = cb + x[0] * ub + x[1] * vb
         hs.append(float(np.dot(na, ca - X) / np.dot(na, nb)))
     return min(hs), max(hs)
+
+
+def overlap_along(A, B):
+    """Hub plates A, B (3D quads) that lap: the length of their overlap seen along B's
+    normal, measured along the line from A's centre to B's; 0 without overlap."""
+    cb, nb, ub, vb, qb = plate_frame(B)
+    ca = plate_frame(A)[0]
+    qb = ccw(qb)
+    qa = ccw([np.array([np.dot(p - cb, ub), np.dot(p - cb, vb)]) for p in A])
+    ov = clip_convex(qa, qb)
+    if len(ov) < 3:
+        return 0.0
+    d = np.array([np.dot(cb - ca, ub), np.dot(cb - ca, vb)])
+    d = d / np.linalg.norm(d)
+    s = [float(np.dot(x, d)) for x in ov]
+    return max(s) - min(s)
 
 
 def turn(Ra, Rb, d):
@@ -1079,6 +1097,9 @@ def main(argv=None):
     stack_gap = (0.0, None)   # ... and the widest gap between them over the lap
     stack_closest = (0.0, None)   # ... and the closest they come over it
     stack_fail = []
+    along_min = (float("inf"), None)  # the plates' overlap along the line of centres
+    along_short = []
+    along_none = 0
     leg_through = (0.0, None)  # a leg's centre line into the neighbour's hub plate at a lap
     legs_through = 0
     under_upper = (0.0, None)  # a cut (a relief) of the lower hub plate under the upper one
@@ -1153,6 +1174,12 @@ def main(argv=None):
         lap_max = max(lap_max, lap)
         if lap < a.min_overlap:
             lap_fail.append(where)
+        along = overlap_along(plate3[f], plate3[g])
+        if along < along_min[0]:
+            along_min = (along, where)
+        if along < a.min_overlap:
+            along_short.append(where)
+        along_none += along <= 0.0
         if one_lap_goal:
             off = abs(lap - float(one_lap_goal["length"]))
             if one_lap[1] is None or off > one_lap[0]:
@@ -1272,6 +1299,11 @@ def main(argv=None):
         "<= %g" % REACH_TOL, rim_reach[1] or "-", not rim_fail)
     row("hub plates at a lap into each other (mm)", "%.3g" % stack_lift[0], "<= %g" % REACH_TOL,
         stack_lift[1] or "-", not stack_fail)
+    if frame["params"].get("hub_laps_touch"):
+        # the frame says every lap's plates were pulled together: they touch somewhere, as
+        # close as a weld bridges
+        row("hub plates at a lap, closest gap between them (mm)", "%.3f" % stack_closest[0],
+            "<= %g" % WELD_TOL, stack_closest[1] or "-", stack_closest[0] <= WELD_TOL)
     row("DXF topology (slots/necks)", "%d problems" % len(struct), "0",
         (struct[0][1] if struct else "-"), not struct)
     row("kabsch residual (mm)", "%.3g" % kabsch_max, "<= %g" % KABSCH_TOL, "-", kabsch_max <= KABSCH_TOL)
@@ -1296,6 +1328,9 @@ def main(argv=None):
           % (stack_gap[0], stack_gap[1]))
     print("info: hub plates at their laps: closest gap between the two over a lap, largest %.3f mm (%s)"
           % (stack_closest[0], stack_closest[1]))
+    print("info: hub plates at their laps: overlap along the line of centres, smallest %.3f mm (%s); "
+          "%d laps under %g mm, %d not overlapping at all"
+          % (along_min[0], along_min[1], len(along_short), a.min_overlap, along_none))
     print("legs through a neighbour's hub plate outside its relief: %d, deepest %.3g mm (%s)"
           % (legs_through, leg_through[0], leg_through[1]))
     print("info: reliefs under the hub plate lying on theirs at a lap: deepest %.3g mm (%s)"
@@ -1378,6 +1413,9 @@ def main(argv=None):
             "hub_stack_lift_max": stack_lift[0],
             "hub_stack_gap_max": stack_gap[0],
             "hub_stack_closest_max": stack_closest[0],
+            "lap_overlap_along_min": along_min[0] if laps_checked else None,
+            "laps_overlap_along_short": len(along_short),
+            "laps_overlap_along_none": along_none,
             "legs_through_hub_plates": legs_through,
             "leg_through_hub_plate_max": leg_through[0],
             "relief_under_upper_max": under_upper[0],

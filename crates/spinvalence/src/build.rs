@@ -115,7 +115,12 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
     cfg.primary.min_overlap(&cfg.profile)?;
     let (sheet, unweldable) = sheet_for_unit_size(&mut cfg, profile_given);
     if !cfg.joints.close && cfg.frame != crate::config::FrameConfig::default() {
-        bail!("frame: parameter overlap needs the joint solve ([joints] close = true)");
+        let what = if cfg.frame.laps_touch {
+            "laps_touch"
+        } else {
+            "overlap"
+        };
+        bail!("frame: parameter {what} needs the joint solve ([joints] close = true)");
     }
     // a hub lap asked for must be one the welds take
     cfg.frame
@@ -939,6 +944,7 @@ fn close_the_joints(
         min_overlap,
         overlap,
         face_sides: Some((short * unit, long * unit)),
+        laps_touch: cfg.frame.laps_touch,
         limits: p.joint_limits(),
         bridge_width: p.neck_width,
         bridge_room: 2.0 * p.neck_width,

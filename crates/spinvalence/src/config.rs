@@ -232,6 +232,10 @@ pub struct FrameConfig {
     pub overlap: Overlap,
     /// How far a hub lap may be from that one length, either way (mm).
     pub overlap_tolerance: f64,
+    /// Pull the two hub plates of every lap together until they touch somewhere, within
+    /// the weld gap limit: a lap weld then needs no filler. Costs time and, on some
+    /// frames, closure (docs/config.md).
+    pub laps_touch: bool,
 }
 
 impl Default for FrameConfig {
@@ -239,6 +243,7 @@ impl Default for FrameConfig {
         Self {
             overlap: Overlap::Rule(OverlapRule::Free),
             overlap_tolerance: 1.0,
+            laps_touch: false,
         }
     }
 }

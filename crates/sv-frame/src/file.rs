@@ -168,6 +168,10 @@ pub struct FrameParams {
     /// constant or a length; absent where the laps are free).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hub_lap: Option<LapGoal>,
+    /// The two hub plates of every lap were pulled together to touch somewhere, within the
+    /// weld gap limit (extra field, `[frame] laps_touch`; absent where they were not).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub hub_laps_touch: bool,
 }
 
 /// One hub lap for every link, so that one gauge block checks every hub joint on site:

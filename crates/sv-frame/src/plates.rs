@@ -211,35 +211,113 @@ pub fn plate_as_cut(tile: &[Point3; 4], inset: [Real; 4]) -> [Point3; 4] {
 /// polygon, so its corners give both. Lying one on the other (`thickness` apart, never
 /// through each other) is `low >= thickness` or `high <= -thickness`.
 pub fn lap_heights(a: &[Point3; 4], b: &[Point3; 4]) -> Option<(Real, Real)> {
-    let nb = plate_normal(b)?;
+    let view = LapView::of(a, b)?;
     let na = plate_normal(a)?;
-    if na.dot(&nb).abs() < 1e-6 {
-        return None;
-    }
-    let u = (b[1] - b[0]).normalize();
-    let v = nb.cross(&u);
-    let flat = |p: &Point3| [(p - b[0]).dot(&u), (p - b[0]).dot(&v)];
-    let fb: Vec<[Real; 2]> = b.iter().map(flat).collect();
-    let mut fa: Vec<[Real; 2]> = a.iter().map(flat).collect();
-    if sv_geom::planar::polygon_area(&fa) < 0.0 {
-        fa.reverse();
-    }
-    let overlap = sv_geom::planar::convex_clip(&fa, &fb);
-    if overlap.len() < 3 {
-        return None;
-    }
     let height = |x: &[Real; 2]| {
-        let on_b = b[0] + u * x[0] + v * x[1];
-        na.dot(&(a[0] - on_b)) / na.dot(&nb)
+        let on_b = view.point(x);
+        na.dot(&(a[0] - on_b)) / na.dot(&view.normal)
     };
     Some(
-        overlap
+        view.overlap
             .iter()
             .map(height)
             .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), h| {
                 (lo.min(h), hi.max(h))
             }),
     )
+}
+
+/// How far two lapping hub plates overlap along the line of their centres (mm), seen along
+/// `b`'s normal: the length of their common outline along that line, 0 where they do not
+/// overlap. The hub lap (the tips passing each other along that line) is this where the
+/// tips meet head on; where they pass each other offset sideways ([`tips_offset`]), less.
+pub fn lap_overlap_length(a: &[Point3; 4], b: &[Point3; 4]) -> Real {
+    let Some(view) = LapView::of(a, b) else {
+        return 0.0;
+    };
+    let centre = |q: &[Point3; 4]| {
+        view.flat(&Point3::from(
+            q.iter().fold(Vector3::zeros(), |s, p| s + p.coords) / 4.0,
+        ))
+    };
+    let (ca, cb) = (centre(a), centre(b));
+    let (dx, dy) = (cb[0] - ca[0], cb[1] - ca[1]);
+    let len = dx.hypot(dy);
+    if len < 1e-9 {
+        return 0.0;
+    }
+    let (lo, hi) = view
+        .overlap
+        .iter()
+        .map(|x| (x[0] * dx + x[1] * dy) / len)
+        .fold((Real::INFINITY, Real::NEG_INFINITY), |(lo, hi), s| {
+            (lo.min(s), hi.max(s))
+        });
+    hi - lo
+}
+
+/// Plate `a` seen along plate `b`'s normal, on `b`'s plane (origin `b[0]`, axes `u` along
+/// its side 0 and `v`): the convex overlap of the two outlines there.
+struct LapView {
+    origin: Point3,
+    u: Vector3,
+    v: Vector3,
+    normal: Vector3,
+    overlap: Vec<[Real; 2]>,
+}
+
+impl LapView {
+    /// `None` when the plates do not overlap or stand square to each other.
+    fn of(a: &[Point3; 4], b: &[Point3; 4]) -> Option<Self> {
+        let normal = plate_normal(b)?;
+        if plate_normal(a)?.dot(&normal).abs() < 1e-6 {
+            return None;
+        }
+        let u = (b[1] - b[0]).normalize();
+        let mut view = Self {
+            origin: b[0],
+            u,
+            v: normal.cross(&u),
+            normal,
+            overlap: Vec::new(),
+        };
+        let fb: Vec<[Real; 2]> = b.iter().map(|p| view.flat(p)).collect();
+        let mut fa: Vec<[Real; 2]> = a.iter().map(|p| view.flat(p)).collect();
+        if sv_geom::planar::polygon_area(&fa) < 0.0 {
+            fa.reverse();
+        }
+        view.overlap = sv_geom::planar::convex_clip(&fa, &fb);
+        (view.overlap.len() >= 3).then_some(view)
+    }
+
+    fn flat(&self, p: &Point3) -> [Real; 2] {
+        [
+            (p - self.origin).dot(&self.u),
+            (p - self.origin).dot(&self.v),
+        ]
+    }
+
+    fn point(&self, x: &[Real; 2]) -> Point3 {
+        self.origin + self.u * x[0] + self.v * x[1]
+    }
+}
+
+/// How far apart across the line of centres the tips of two lapping hub plates pass (mm):
+/// corner `k` of `a` and corner `m` of `b`, the offset between them square to the line of
+/// their centres and to the plates' mean normal. Aligned tips (0) overlap in a square
+/// whose diagonal is the lap; offset by `d`, two right-angled tips overlap along the line
+/// of centres by the lap less `d` only, and not at all once `d` reaches the lap.
+pub fn tips_offset(a: &[Point3; 4], k: usize, b: &[Point3; 4], m: usize) -> Real {
+    let centre = |q: &[Point3; 4]| q.iter().fold(Vector3::zeros(), |s, p| s + p.coords) / 4.0;
+    let e = (centre(b) - centre(a)).normalize();
+    let n = match (plate_normal(a), plate_normal(b)) {
+        (Some(na), Some(nb)) => (na + nb).normalize(),
+        _ => return Real::NAN,
+    };
+    match n.cross(&e).try_normalize(1e-12) {
+        Some(across) => (a[k] - b[m]).dot(&across).abs(),
+        None => Real::NAN,
+    }
 }
 
 /// The turn of a hinge from plate `a`'s side `k` to plate `b`'s side `m` (the two facing
@@ -316,6 +394,53 @@ mod tests {
             Point3::new(x0 + 1.0, 1.0, z),
             Point3::new(x0, 1.0, z),
         ]
+    }
+
+    /// Two hub plates, diamonds of half-diagonal 100 mm whose tips face each other along x,
+    /// `lap` past each other and `side` apart across: their overlap along the line of
+    /// centres is the extent, along that line, of the points inside both (counted on a
+    /// 0.05 mm grid); where the tips pass offset by more than the lap the plates do not
+    /// overlap at all, though the tips still pass each other along the line of centres.
+    #[test]
+    fn the_overlap_along_the_line_of_centres_shrinks_as_the_tips_pass_offset() {
+        let diamond = |cx: Real, cy: Real, z: Real| -> [Point3; 4] {
+            [(100.0, 0.0), (0.0, 100.0), (-100.0, 0.0), (0.0, -100.0)]
+                .map(|(x, y)| Point3::new(cx + x, cy + y, z))
+        };
+        let centre = |q: &[Point3; 4]| {
+            Point3::from(q.iter().fold(Vector3::zeros(), |s, p| s + p.coords) / 4.0)
+        };
+        for (lap, side) in [(40.0, 0.0), (40.0, 10.0), (40.0, 25.0), (30.0, 55.0)] {
+            let (cx, cy) = (200.0 - lap, side);
+            let a = diamond(0.0, 0.0, 2.6);
+            let b = diamond(cx, cy, 0.0);
+            let len = Real::hypot(cx, cy);
+            let (ex, ey) = (cx / len, cy / len);
+            let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
+            for i in 0..=2000 {
+                for j in 0..=2000 {
+                    let (x, y) = (60.0 + 0.05 * i as Real, -50.0 + 0.05 * j as Real);
+                    if x.abs() + y.abs() <= 100.0 && (x - cx).abs() + (y - cy).abs() <= 100.0 {
+                        lo = lo.min(x * ex + y * ey);
+                        hi = hi.max(x * ex + y * ey);
+                    }
+                }
+            }
+            let expected = if hi >= lo { hi - lo } else { 0.0 };
+            let along = lap_overlap_length(&a, &b);
+            assert!(
+                (along - expected).abs() < 0.1,
+                "lap {lap}, offset {side}: {along} vs {expected}"
+            );
+            // the tips' offset square to the line of centres
+            assert!((tips_offset(&a, 0, &b, 2) - 200.0 * side / len).abs() < 1e-9);
+            if side > lap {
+                assert_eq!(along, 0.0);
+                assert!(crate::solve::hub_overlap(&centre(&a), &a[0], &centre(&b), &b[2]) > 10.0);
+            } else {
+                assert!(along > 0.0);
+            }
+        }
     }
 
     /// A leg posed between two world pins puts its hub pin on the first exactly, its rim pin

@@ -167,6 +167,8 @@ pub struct Joints {
     pub limits: JointLimits,
     /// The one hub lap they were to hold, if any.
     pub hub_lap: Option<LapGoal>,
+    /// Whether the plates of every hub lap were pulled together to touch.
+    pub laps_touch: bool,
 }
 
 /// A solved frame.
@@ -1114,6 +1116,7 @@ impl Solved {
                 thickness: self.joints.as_ref().map(|j| j.thickness),
                 joint_limits: self.joints.as_ref().map(|j| j.limits),
                 hub_lap: self.joints.as_ref().and_then(|j| j.hub_lap),
+                hub_laps_touch: self.joints.as_ref().is_some_and(|j| j.laps_touch),
             },
             mesh: MeshData {
                 vertices: mesh.vertices.iter().map(|p| arr(*p)).collect(),

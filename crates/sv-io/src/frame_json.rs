@@ -481,6 +481,7 @@ pub(crate) mod tests {
                 thickness: None,
                 joint_limits: None,
                 hub_lap: None,
+                hub_laps_touch: false,
                 spin_angle: std::f64::consts::FRAC_PI_4,
                 expansion: 1.0,
                 cut: None,

@@ -7,7 +7,9 @@ use std::collections::HashMap;
 
 use rayon::prelude::*;
 
-use sv_frame::plates::{edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut};
+use sv_frame::plates::{
+    edge_to_plate, facing_reach, hinge_turn, lap_heights, lap_overlap_length, plate_as_cut,
+};
 use sv_frame::{CheckReport, FrameFile, LinkRecord, Worst};
 use sv_geom::{planar, segment_closest, Point2, Point3, Real, Vector3};
 
@@ -279,6 +281,14 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         }
     }
     let mut laps = Worst::min("hub lap as cut (mm, smallest)", limits.min_overlap);
+    // the lap is how far the tips pass each other along the line of centres; where they
+    // pass offset sideways the plates overlap along that line by less, and not at all once
+    // the offset reaches the lap: what a lap weld has to hold on to (not held yet)
+    let mut overlaps = Worst::min(
+        "hub lap, the plates' overlap along the line of centres (mm, smallest; not held)",
+        Real::NEG_INFINITY,
+    );
+    let (mut overlaps_short, mut overlaps_none) = (0, 0);
     let mut claims = Worst::max(
         "hub lap = frame.json hub_overlap (mm)",
         limits.overlap_claim,
@@ -312,11 +322,20 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     );
     // and the nearest they come: where it is more than a weld bridges (the weld gap
     // limit), the two plates touch nowhere over the lap, and welding it needs them pressed
-    // together or a filler
-    let mut apart = Worst::max(
-        "hub plates at a lap, closest gap between them (mm; not held)",
-        Real::INFINITY,
-    );
+    // together or a filler; held to that limit where the joint solve pulled them together
+    // (frame.json params.hub_laps_touch)
+    let touch = frame.params.hub_laps_touch;
+    let mut apart = if touch {
+        Worst::max(
+            "hub plates at a lap, closest gap between them (mm)",
+            limits.weld_gap,
+        )
+    } else {
+        Worst::max(
+            "hub plates at a lap, closest gap between them (mm; not held)",
+            Real::INFINITY,
+        )
+    };
     let (mut laps_apart, mut laps_seen) = (0, 0);
     // each leg leaves its hub at a corner, and a corner is where the neighbour's hub plate
     // laps: at every lap one leg runs down through the lower plate, through the relief cut
@@ -350,6 +369,9 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         let [a, b] = link.units;
         let at = || format!("link {li} ({} - {})", frame.units[a].id, frame.units[b].id);
         laps.see(m.lap, at);
+        overlaps.see(m.overlap, at);
+        overlaps_short += usize::from(m.overlap < limits.min_overlap);
+        overlaps_none += usize::from(m.overlap <= 0.0);
         claims.see((m.lap - link.hub_overlap).abs(), at);
         if let Some((length, row)) = &mut one_lap {
             row.see((m.lap - *length).abs(), at);
@@ -466,11 +488,25 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         ])
         .map(Worst::row)
         .collect();
+    let mut row = overlaps.row();
+    row.at = format!(
+        "{}; {overlaps_short} laps overlap less than {} mm along it, {overlaps_none} not at all",
+        row.at, limits.min_overlap
+    );
+    if overlaps_short > 0 && !touch {
+        row.at
+            .push_str(" ([frame] laps_touch = true keeps the tips in line)");
+    }
+    rows.push(row);
     let mut row = apart.row();
     row.at = format!(
         "{}; {laps_apart} of {laps_seen} laps more than {} mm apart everywhere",
         row.at, limits.weld_gap
     );
+    if laps_apart > 0 && !touch {
+        row.at
+            .push_str(" ([frame] laps_touch = true pulls them together)");
+    }
     rows.push(row);
     // the two rows of legs say how many legs are over the limit, not only the deepest
     for legs in [legs_through, legs_rims] {
@@ -491,6 +527,8 @@ fn centroid(q: &[Point3; 4]) -> Point3 {
 struct AtLink {
     /// The hub lap along the line between the hub plates' centroids.
     lap: Real,
+    /// How far the two hub plates overlap along that line.
+    overlap: Real,
     /// Per unit of the link (a on b, then b on a): how deep each of its legs runs into the
     /// other's hub plate outside its cuts, and, where a leg runs through it (the unit's
     /// plate lies above), how deep the other's cuts reach under its hub plate.
@@ -560,6 +598,7 @@ fn measure_link(
     });
     Some(AtLink {
         lap,
+        overlap: lap_overlap_length(&fa.placed.hub_plate, &fb.placed.hub_plate),
         legs_through,
         stacking,
         depth,

@@ -74,6 +74,11 @@ pub struct JointOptions {
     /// The hub mesh's goal for every face side (mm, shortest and longest), held where a
     /// side would leave it; `None`: not held.
     pub face_sides: Option<(Real, Real)>,
+    /// Pull the two hub plates of every lap together until they touch somewhere (the
+    /// closest gap between them within what a weld bridges, `limits.weld_gap`), so that a
+    /// lap weld needs no filler. It costs time and, on some frames, closure: off by
+    /// default (docs/geometry.md 5.5).
+    pub laps_touch: bool,
     /// What the joints must reach.
     pub limits: JointLimits,
     /// Width of a bridge along its joint (mm): turns are weighed as the offset they make at
@@ -111,6 +116,7 @@ impl Default for JointOptions {
             min_overlap: 0.0,
             overlap: None,
             face_sides: None,
+            laps_touch: false,
             limits: JointLimits::default(),
             bridge_width: 7.5,
             bridge_room: 15.0,
@@ -655,6 +661,7 @@ pub fn close_joints(
             thickness: options.thickness,
             limits: options.limits,
             hub_lap: options.overlap,
+            laps_touch: options.laps_touch,
         }),
         evaluation,
         report,

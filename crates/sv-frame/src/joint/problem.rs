@@ -11,7 +11,7 @@ use super::unit::{Model, PlatePose, Shape, UnitFailure, UnitPoints, INPUTS};
 use super::{Anchor, JointFigures, JointOptions};
 use crate::plates::{
     edge_to_plate, facing_reach, hinge_turn, lap_heights, plate_as_cut, reach_into, reach_profile,
-    REACH_ROWS,
+    tips_offset, REACH_ROWS,
 };
 use crate::solve::hub_overlap;
 use crate::GOAL_PLANARITY;
@@ -708,6 +708,7 @@ impl Problem<'_> {
         let pts: [Point3; 8] = std::array::from_fn(|i| units[i / 4].points[4 + i % 4]);
         let laps = o.min_overlap > 0.0 || o.overlap.is_some();
         let (t, top) = (o.thickness, self.on_top[li]);
+        let touch = MARGIN * o.limits.weld_gap;
         let hub_rows = |p: &[Point3; 8]| {
             let (a, b) = ([p[0], p[1], p[2], p[3]], [p[4], p[5], p[6], p[7]]);
             let lap = hub_overlap(&centroid4(&a), &a[k], &centroid4(&b), &b[m]);
@@ -721,25 +722,46 @@ impl Problem<'_> {
                 None if laps => (o.min_overlap + LAP_MARGIN - lap).max(0.0),
                 None => 0.0,
             };
-            let into = lap_heights(&a, &b).map_or(0.0, |(low, high)| {
-                let need = t + STACK_MARGIN;
-                if top {
-                    (need - low).max(0.0)
-                } else {
-                    (high + need).max(0.0)
-                }
+            // pulled together, the tips could slide past each other sideways until the
+            // plates no longer overlap (the lap, along the line of centres, stays): the lap
+            // less the tips' offset, which is how far right-angled tips overlap along that
+            // line, at least half the weld minimum. Measured: with the overlap itself
+            // (`lap_overlap_length`) held instead, more welds stayed open on the vault and
+            // the saddle (docs/geometry.md 5.5)
+            let aligned = (0.5 * o.min_overlap - (lap - tips_offset(&a, k, &b, m))).max(0.0);
+            // the mid-planes' distance where the two plates come closest, the upper one's
+            // over the lower one's: at least a thickness (and a margin), and at most a
+            // thickness and what a weld bridges, so that the plates touch somewhere
+            let [into, apart] = lap_heights(&a, &b).map_or([0.0; 2], |(low, high)| {
+                let nearest = if top { low } else { -high };
+                [
+                    (t + STACK_MARGIN - nearest).max(0.0),
+                    (nearest - t - touch).max(0.0),
+                ]
             });
-            [short, into]
+            [short, into, apart, aligned]
         };
         let now = hub_rows(&pts);
         let lap_weight = if o.overlap.is_some() { W_LIMIT } else { W_LAP };
-        let weights = [lap_weight * on(now[0]), W_STACK * on(now[1])];
+        // pulled together, the plates would rather touch than stand apart, but must not
+        // pass through each other: that row is then a limit
+        let (into_weight, apart_weight) = if o.laps_touch {
+            (W_LIMIT, W_STACK)
+        } else {
+            (W_STACK, 0.0)
+        };
+        let weights = [
+            lap_weight * on(now[0]),
+            into_weight * on(now[1]),
+            apart_weight * on(now[2]),
+            apart_weight * on(now[3]),
+        ];
         let grads = if grad && weights.iter().any(|&w| w > 0.0) {
             fd_jac(&pts, h, hub_rows)
         } else {
-            [[Vector3::zeros(); 8]; 2]
+            [[Vector3::zeros(); 8]; 4]
         };
-        for i in 0..2 {
+        for i in 0..4 {
             out.push(LinkRow {
                 kind: 2,
                 r: now[i],
