@@ -284,10 +284,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     // the lap is how far the tips pass each other along the line of centres; where they
     // pass offset sideways the plates overlap along that line by less, and not at all once
     // the offset reaches the lap: what a lap weld has to hold on to (not held yet)
-    let mut overlaps = Worst::min(
-        "hub lap, the plates' overlap along the line of centres (mm, smallest; not held)",
-        Real::NEG_INFINITY,
-    );
+    let mut overlaps = Worst::min(LAP_OVERLAP_ROW, Real::NEG_INFINITY);
     let (mut overlaps_short, mut overlaps_none) = (0, 0);
     let mut claims = Worst::max(
         "hub lap = frame.json hub_overlap (mm)",
@@ -518,6 +515,11 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     rows.push(under_upper.row());
     CheckReport { rows }
 }
+
+/// The fold check's row of how far the plates of each hub lap overlap along the line of
+/// centres (an info row: a smallest of 0 is a lap whose plates do not overlap at all).
+pub const LAP_OVERLAP_ROW: &str =
+    "hub lap, the plates' overlap along the line of centres (mm, smallest; not held)";
 
 fn centroid(q: &[Point3; 4]) -> Point3 {
     Point3::from(q.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / 4.0)
