@@ -151,7 +151,7 @@ pub fn search_row(
     searched: bool,
     seconds: f64,
 ) -> String {
-    let m = |n: u64| format!("{:.2} M", n as f64 / 1e6);
+    let m = evaluations_text;
     if !searched {
         format!(
             "none: the {seconds} s time cap stopped the construction first (after {} \
@@ -177,6 +177,23 @@ pub fn search_row(
             m(construction)
         )
     }
+}
+
+/// A count of evaluations as the summary says it: in millions from 100,000 up (`0.33 M`),
+/// below that whole, its thousands grouped (`2,000`: a small budget read as `0.00 M`).
+fn evaluations_text(n: u64) -> String {
+    if n >= 100_000 {
+        return format!("{:.2} M", n as f64 / 1e6);
+    }
+    let digits = n.to_string();
+    let mut grouped = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            grouped.push(',');
+        }
+        grouped.push(c);
+    }
+    grouped
 }
 
 /// The `construction` row of a summary when the time cap stopped the construction: how
@@ -305,7 +322,23 @@ pub fn left_out_groups(left_out: &[LeftOut]) -> Vec<(String, &str)> {
 
 #[cfg(test)]
 mod tests {
-    use super::{search_row, slowdown_from_loadavg};
+    use super::{evaluations_text, search_row, slowdown_from_loadavg};
+
+    /// Small counts are said whole (a budget of 2,000 read "0.00 M"), large ones in millions.
+    #[test]
+    fn small_counts_of_evaluations_are_said_whole() {
+        assert_eq!(evaluations_text(0), "0");
+        assert_eq!(evaluations_text(999), "999");
+        assert_eq!(evaluations_text(2_000), "2,000");
+        assert_eq!(evaluations_text(56_337), "56,337");
+        assert_eq!(evaluations_text(100_000), "0.10 M");
+        assert_eq!(evaluations_text(1_700_000), "1.70 M");
+        assert_eq!(
+            search_row(2_000, 2_000, 56_337, false, true, 5.0),
+            "2,000 evaluations (work budget 2,000, the construction's 56,337 apart; the same \
+             layout on every machine)"
+        );
+    }
 
     /// The search row never puts the construction's evaluations against the search's
     /// budget: after a construction the clock stopped there was no search, and the row
