@@ -726,8 +726,8 @@ impl Problem<'_> {
             // plates no longer overlap (the lap, along the line of centres, stays): the lap
             // less the tips' offset, which is how far right-angled tips overlap along that
             // line, at least half the weld minimum. Measured: with the overlap itself
-            // (`lap_overlap_length`) held instead, more welds stayed open on the vault and
-            // the saddle (docs/geometry.md 5.5)
+            // (`lap_overlap_length`) held instead, welds stayed open on the vault or the
+            // saddle (docs/geometry.md 5.5)
             let aligned = (0.5 * o.min_overlap - (lap - tips_offset(&a, k, &b, m))).max(0.0);
             // the mid-planes' distance where the two plates come closest, the upper one's
             // over the lower one's: at least a thickness (and a margin), and at most a
