@@ -145,26 +145,33 @@ fn dxf_parts_nest_inside_the_sheet_and_open_contours_are_left_out() {
     );
 }
 
-#[test]
-fn strip_instance_reaches_a_real_density() {
-    let dir = Dir::new();
-    let fu = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/datasets/nesting/spp/fu.json"
+/// `spinvalence nest` on the strip-packing benchmark instance `name` (shared/datasets) with
+/// a work budget of `evaluations` and a time cap no busy machine reaches, into `dir/name`:
+/// the run and its strip.json.
+fn nest_spp(dir: &Dir, name: &str, evaluations: &str) -> (crate::util::Output, serde_json::Value) {
+    let instance = format!(
+        "{}/../../../shared/datasets/nesting/spp/{name}.json",
+        env!("CARGO_MANIFEST_DIR")
     );
     let out = dir.run(&[
         "nest",
-        fu,
+        &instance,
         "--nest-evaluations",
-        "150000",
+        evaluations,
         "--nest-seconds",
         "600",
         "--out",
-        "fu",
-        "--quiet",
+        name,
     ]);
     out.expect_code(0);
-    let r = read_json(&dir.join("fu/strip.json"));
+    let strip = read_json(&dir.join(&format!("{name}/strip.json")));
+    (out, strip)
+}
+
+#[test]
+fn strip_instance_reaches_a_real_density() {
+    let dir = Dir::new();
+    let (_, r) = nest_spp(&dir, "fu", "150000");
     let density = num(&r["density"], "density");
     // above the jagua-rs lbf reference (70.32 %) in best_known_spp.csv
     assert!(density > 0.7032 && density < 1.0, "{density}");
@@ -221,22 +228,7 @@ fn files_that_share_a_stem_get_unique_ids_by_their_directory() {
 #[test]
 fn a_strip_search_spends_its_budget_apart_from_the_construction() {
     let dir = Dir::new();
-    let instance = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/datasets/nesting/spp/gardeyn6.json"
-    );
-    let out = dir.run(&[
-        "nest",
-        instance,
-        "--nest-evaluations",
-        "2000",
-        "--nest-seconds",
-        "600",
-        "--out",
-        "g",
-    ]);
-    out.expect_code(0);
-    let r = read_json(&dir.join("g/strip.json"));
+    let (out, r) = nest_spp(&dir, "gardeyn6", "2000");
     assert_eq!(r["evaluations"], 2000, "{r}");
     assert_eq!(r["work_budget"], 2000, "{r}");
     assert_eq!(r["cut_by_time"], false, "{r}");

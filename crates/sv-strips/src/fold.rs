@@ -485,26 +485,32 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         ])
         .map(Worst::row)
         .collect();
-    let mut row = overlaps.row();
-    row.at = format!(
-        "{}; {overlaps_short} laps overlap less than {} mm along it, {overlaps_none} not at all",
-        row.at, limits.min_overlap
-    );
-    if overlaps_short > 0 && !touch {
-        row.at
-            .push_str(" ([frame] laps_touch = true keeps the tips in line)");
+    // the two rows of the laps' plates count the laps that miss, and name the lever where
+    // it was not pulled
+    let lever = |missing: usize, what: &str| {
+        if missing > 0 && !touch {
+            format!(" ([frame] laps_touch = true {what})")
+        } else {
+            String::new()
+        }
+    };
+    let counts = [
+        format!(
+            "{overlaps_short} laps overlap less than {} mm along it, {overlaps_none} not at all{}",
+            limits.min_overlap,
+            lever(overlaps_short, "keeps the tips in line")
+        ),
+        format!(
+            "{laps_apart} of {laps_seen} laps more than {} mm apart everywhere{}",
+            limits.weld_gap,
+            lever(laps_apart, "pulls them together")
+        ),
+    ];
+    for (check, counts) in [overlaps, apart].into_iter().zip(counts) {
+        let mut row = check.row();
+        row.at = format!("{}; {counts}", row.at);
+        rows.push(row);
     }
-    rows.push(row);
-    let mut row = apart.row();
-    row.at = format!(
-        "{}; {laps_apart} of {laps_seen} laps more than {} mm apart everywhere",
-        row.at, limits.weld_gap
-    );
-    if laps_apart > 0 && !touch {
-        row.at
-            .push_str(" ([frame] laps_touch = true pulls them together)");
-    }
-    rows.push(row);
     // the two rows of legs say how many legs are over the limit, not only the deepest
     for legs in [legs_through, legs_rims] {
         let over = legs.outside();
