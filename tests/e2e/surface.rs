@@ -665,6 +665,60 @@ fn a_tube_is_laid_out_as_a_ring_along_its_axis() {
     }
 }
 
+/// A courtyard that is not star-shaped about its centre (fixtures/targets/l_courtyard.obj:
+/// an 8 x 5 m rectangle round an L-shaped court, from the layout probes) folds both rings
+/// the automatic layout draws. It failed with a bare `initial face 176 is flipped against
+/// the target`; the one line now names each layout tried, how many of its faces fold and
+/// where the first one is (its centre in mm, at the court's inner corner), and the
+/// designer's layout as the lever, and nothing is written.
+#[test]
+fn a_target_no_automatic_layout_fits_names_the_layouts_the_place_and_the_lever() {
+    let dir = Dir::new();
+    let out = dir.run(&[
+        "build",
+        "--target",
+        &target("l_courtyard"),
+        "--out",
+        "o",
+        "--quiet",
+    ]);
+    out.expect_code(2);
+    let line = out.one_error_line();
+    assert!(line.contains("l_courtyard.obj: no automatic layout: every automatic layout folds: the ring of 8 faces round the courtyard ("), "{line}");
+    assert!(
+        line.contains(
+            "then the ring of 8 faces joining the two loops at equal shares of their lengths ("
+        ),
+        "{line}"
+    );
+    assert!(
+        line.contains("--layout COARSE.obj") && line.contains("docs/secondary.md"),
+        "{line}"
+    );
+    // each layout's count and place: `N of M faces flipped, the first centred at (x, y, z) mm`
+    let places: Vec<[f64; 3]> = line
+        .split("faces flipped, the first centred at (")
+        .skip(1)
+        .map(|rest| {
+            let c: Vec<f64> = rest[..rest.find(')').unwrap()]
+                .split(", ")
+                .map(|x| x.parse().unwrap())
+                .collect();
+            [c[0], c[1], c[2]]
+        })
+        .collect();
+    assert_eq!(places.len(), 2, "{line}");
+    for p in places {
+        // on the court's west arm (x from -2000 to -800, y from 0 to 1400), on the roof
+        assert!(
+            (-2100.0..-700.0).contains(&p[0]) && (0.0..1500.0).contains(&p[1]),
+            "{line}"
+        );
+        assert!((500.0..900.0).contains(&p[2]), "{line}");
+    }
+    assert!(!dir.join("o").exists());
+}
+
 /// Where the joints are left open (here: laps no sheet can weld at 150 mm) and two units of
 /// a strip face each other too little for a bridge (the arched tent's faces are far from
 /// planar), the strip ends there instead of the build refusing the parts: the summary

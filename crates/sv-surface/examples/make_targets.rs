@@ -36,6 +36,7 @@
 //! | `twisted_vault.obj` | arch section turning by 0.5 rad along its 6 m | twisted rectangle |
 //! | `annulus_roof.obj` | paraboloid z = 900 - x^2 / 12000 - y^2 / 9000 | ellipse 3.2 x 2.6 m around a 1.2 x 0.9 m courtyard |
 //! | `torus_patch.obj` | torus R = 3 m, r = 1.5 m, both curvature signs | two meridians and two parallels |
+//! | `horseshoe.obj` | paraboloid z = 900 - r^2 / 15000 | a 1.5 m wide band bent round a half circle (R 2.25 m), half-round ends: no corner, its centre outside the plan |
 //!
 //! The frame's acceptance (docs/geometry.md, "Closing the joints") adds `hypar_square.obj`,
 //! z = (x^2 - y^2) / 12000 over a 3.6 x 3.6 m square along its principal directions.
@@ -262,6 +263,15 @@ fn boundary_samples(corners: &[(f64, f64)]) -> Vec<(f64, f64)> {
 /// on the square of half-size `rho = max(|s|, |t|)` at perimeter fraction `tau`; it goes to
 /// `rho` times the boundary point at `tau`, lifted by `height`.
 fn footprint_obj(name: &str, corners: &[(f64, f64)], height: fn(f64, f64) -> f64) -> String {
+    footprint_obj_placed(name, corners, &|x, y| (x, y, height(x, y)))
+}
+
+/// [`footprint_obj`] with the plan point `(x, y)` placed at `place(x, y)` (a bend).
+fn footprint_obj_placed(
+    name: &str,
+    corners: &[(f64, f64)],
+    place: &dyn Fn(f64, f64) -> (f64, f64, f64),
+) -> String {
     let rim = boundary_samples(corners);
     let at = |tau: f64| {
         let x = tau.rem_euclid(1.0) * rim.len() as f64;
@@ -274,7 +284,7 @@ fn footprint_obj(name: &str, corners: &[(f64, f64)], height: fn(f64, f64) -> f64
         let (s, t) = (grid_coord(i), grid_coord(j));
         let rho = s.abs().max(t.abs());
         if rho == 0.0 {
-            return (0.0, 0.0, height(0.0, 0.0));
+            return place(0.0, 0.0);
         }
         let (a, b) = (s / rho, t / rho);
         // counter-clockwise from the south-east corner: east, north, west, south sides
@@ -288,8 +298,33 @@ fn footprint_obj(name: &str, corners: &[(f64, f64)], height: fn(f64, f64) -> f64
             (3.0 + (a + 1.0) / 2.0) / 4.0
         };
         let (x, y) = at(tau);
-        (rho * x, rho * y, height(rho * x, rho * y))
+        place(rho * x, rho * y)
     })
+}
+
+/// Horseshoe: a stadium (a 2 x 1.5 m band whose centreline, 7.07 m long, is a half circle of
+/// radius 2.25 m, with half-round ends) bent onto that half circle: the arch opens south,
+/// its legs end in half circles below the x axis; no corner, and its centre lies in the
+/// opening (outside the plan).
+fn horseshoe_obj() -> String {
+    let (radius, half) = (2250.0, 750.0);
+    let straight = PI * radius / 2.0;
+    let mut stadium = Vec::new();
+    for end in [1.0, -1.0] {
+        for k in 0..=24 {
+            let phi = -PI / 2.0 + PI * k as f64 / 24.0;
+            stadium.push((end * (straight + half * phi.cos()), end * half * phi.sin()));
+        }
+    }
+    footprint_obj_placed("horseshoe", &stadium, &|x, y| {
+        let (theta, r) = (PI / 2.0 - x / radius, radius + y);
+        let (px, py) = (r * theta.cos(), r * theta.sin());
+        (px, py, horseshoe_height(px, py))
+    })
+}
+
+fn horseshoe_height(x: f64, y: f64) -> f64 {
+    900.0 - (x * x + y * y) / 15000.0
 }
 
 /// Points of an ellipse with semi-axes `a`, `b` about `centre`, counter-clockwise.
@@ -376,6 +411,7 @@ fn footprints() -> Vec<(&'static str, String)> {
                 20,
             ),
         ),
+        ("horseshoe", horseshoe_obj()),
     ]
 }
 

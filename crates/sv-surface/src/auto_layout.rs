@@ -18,7 +18,11 @@
 //! | two boundary loops side by side or one over the other (a tube) | a ring of eight faces along it | none |
 //!
 //! Everything else (four corners, one or two corners, several reflex corners) goes to
-//! the four-corner grid.
+//! the four-corner grid. A layout whose subdivision starts with a face flipped against the
+//! target does not fit the footprint (an O-grid round a horseshoe's centre, which lies
+//! outside its plan; the courtyard's ring round an L-shaped court): [`fallback`] names the
+//! one `param.rs` tries next, and [`Drawn::describe`] names each in the error where all
+//! fold.
 
 use sv_frame::QuadMesh;
 use sv_geom::{Point3, Real, Vector3};
@@ -83,19 +87,85 @@ fn corners(index: &TargetIndex<'_>, lp: &[usize], window: Real) -> Vec<Corner> {
         .collect()
 }
 
-/// The automatic coarse layout of `index`'s target, or `None` where the four-corner grid
-/// applies (see the module documentation).
-pub(crate) fn coarse_layout(index: &TargetIndex<'_>) -> Result<Option<QuadMesh>, SurfaceError> {
+/// Which automatic layout was drawn: the messages name it where it folds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Drawn {
+    /// The four-corner conformal grid of `param.rs` (no coarse layout), for a footprint
+    /// with these convex and reflex corners.
+    FourCorner { convex: usize, reflex: usize },
+    /// A footprint without corners: an inner quad and a ring of four faces.
+    OGrid,
+    /// One face per convex corner around the centre (that many corners).
+    PerCorner(usize),
+    /// An L: three faces meeting at the reflex corner.
+    ReflexCorner,
+    /// A ring of faces around a courtyard, each outer point joined to the hole's point in
+    /// the same direction from the hole's centre.
+    Courtyard,
+    /// A ring of faces joining the two loops at equal shares of their lengths.
+    RingByLength,
+    /// A ring of faces along a tube.
+    Tube,
+}
+
+impl Drawn {
+    /// The layout in the words of docs/secondary.md's table.
+    pub(crate) fn describe(self) -> String {
+        match self {
+            Drawn::FourCorner { convex, reflex } => format!(
+                "the four-corner grid (the footprint has {convex} convex and {reflex} reflex corners)"
+            ),
+            Drawn::OGrid => "the O-grid of a footprint without corners".into(),
+            Drawn::PerCorner(k) => format!("one face per corner ({k} corners round the centre)"),
+            Drawn::ReflexCorner => {
+                "three faces at the reflex corner (five convex corners and one reflex)".into()
+            }
+            Drawn::Courtyard => format!("the ring of {RING_FACES} faces round the courtyard"),
+            Drawn::RingByLength => format!(
+                "the ring of {RING_FACES} faces joining the two loops at equal shares of their lengths"
+            ),
+            Drawn::Tube => format!("the ring of {RING_FACES} faces along the tube"),
+        }
+    }
+}
+
+/// The layout to try where `drawn` folds on `index`'s target, if any: the four-corner grid
+/// after a one-loop coarse layout (it opens its smooth corners into valence-3 vertices as
+/// the O-grid has them), the ring joined by arc length after the courtyard's ring (a
+/// courtyard not star-shaped about its centre: an L).
+pub(crate) fn fallback(index: &TargetIndex<'_>, drawn: Drawn) -> Option<(Drawn, Option<QuadMesh>)> {
+    match drawn {
+        Drawn::OGrid | Drawn::PerCorner(_) | Drawn::ReflexCorner => {
+            let (convex, reflex) = corner_counts(index);
+            Some((Drawn::FourCorner { convex, reflex }, None))
+        }
+        Drawn::Courtyard => Some((Drawn::RingByLength, Some(tube(index)))),
+        Drawn::FourCorner { .. } | Drawn::RingByLength | Drawn::Tube => None,
+    }
+}
+
+/// Convex and reflex corners of the outer loop.
+fn corner_counts(index: &TargetIndex<'_>) -> (usize, usize) {
+    let found = corners(index, &index.boundary, index.perimeter() / 40.0);
+    let convex = found.iter().filter(|c| !c.reflex).count();
+    (convex, found.len() - convex)
+}
+
+/// The automatic layout of `index`'s target: which one, and its coarse quad mesh, which
+/// is `None` for the four-corner grid (see the module documentation).
+pub(crate) fn coarse_layout(
+    index: &TargetIndex<'_>,
+) -> Result<(Drawn, Option<QuadMesh>), SurfaceError> {
     let v = &index.mesh.vertices;
     match index.loops.len() {
         1 => {}
         2 => {
             let ring = if loops_nested_in_plan(index) {
-                ring(index)
+                (Drawn::Courtyard, ring(index))
             } else {
-                tube(index)
+                (Drawn::Tube, tube(index))
             };
-            return Ok(Some(ring));
+            return Ok((ring.0, Some(ring.1)));
         }
         n => {
             return Err(SurfaceError::NeedsLayout(format!(
@@ -119,7 +189,7 @@ pub(crate) fn coarse_layout(index: &TargetIndex<'_>) -> Result<Option<QuadMesh>,
         loop_at(v, lp, &arc, 0.5 * (sa + sb))
     };
     let layout = match (convex, reflex) {
-        (0, 0) => o_grid(index),
+        (0, 0) => (Drawn::OGrid, o_grid(index)),
         (3, 0) | (5.., 0) => {
             // one face per corner: corner, midpoint to the next corner, centre, midpoint
             // from the previous corner
@@ -133,7 +203,7 @@ pub(crate) fn coarse_layout(index: &TargetIndex<'_>) -> Result<Option<QuadMesh>,
             let faces = (0..k)
                 .map(|i| [i, k + i, 2 * k, k + (i + k - 1) % k])
                 .collect();
-            QuadMesh { vertices, faces }
+            (Drawn::PerCorner(k), QuadMesh { vertices, faces })
         }
         (5, 1) => {
             // an L: the reflex corner r, the corners around it c1 .. c5, the one opposite
@@ -160,11 +230,11 @@ pub(crate) fn coarse_layout(index: &TargetIndex<'_>) -> Result<Option<QuadMesh>,
             vertices.push(p);
             vertices.push(q);
             let faces = vec![[3, 6, 0, 7], [6, 4, 5, 0], [7, 0, 1, 2]];
-            QuadMesh { vertices, faces }
+            (Drawn::ReflexCorner, QuadMesh { vertices, faces })
         }
-        _ => return Ok(None),
+        _ => return Ok((Drawn::FourCorner { convex, reflex }, None)),
     };
-    Ok(Some(layout))
+    Ok((layout.0, Some(layout.1)))
 }
 
 /// Boundary points where the loop is extreme along the target frame's diagonals, in loop

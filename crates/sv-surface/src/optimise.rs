@@ -51,6 +51,38 @@ const FAR_MOVE: Real = 0.5;
 const REACH_GROWTH: Real = 1.5;
 const REACH_MAX: Real = 10.0;
 
+/// Faces of `mesh` whose normal (the cross product of its diagonals) points away from the
+/// target's normal at the point of the target closest to the face's centre: a mesh that
+/// starts with one cannot be optimised (the optimiser keeps every face unfolded).
+pub(crate) fn flipped_faces(index: &TargetIndex<'_>, mesh: &QuadMesh) -> Vec<usize> {
+    (0..mesh.faces.len())
+        .filter(|&f| {
+            let q = mesh.face_points(f);
+            let centre = Point3::from(q.iter().map(|p| p.coords).sum::<Vector3>() / 4.0);
+            let g = (q[0] - q[2]).cross(&(q[1] - q[3]));
+            g.dot(&index.closest(&centre).normal) <= 0.0
+        })
+        .collect()
+}
+
+/// How many of `mesh`'s faces `flipped` names and where the first one is, for a message:
+/// `3 of 212 faces flipped, the first centred at (1200, -350, 640) mm`.
+pub(crate) fn flipped_text(mesh: &QuadMesh, flipped: &[usize]) -> String {
+    let at = flipped.first().map_or(String::new(), |&f| {
+        let q = mesh.face_points(f);
+        let c = q.iter().map(|p| p.coords).sum::<Vector3>() / 4.0;
+        format!(
+            ", the first centred at ({:.0}, {:.0}, {:.0}) mm",
+            c.x, c.y, c.z
+        )
+    });
+    format!(
+        "{} of {} faces flipped{at}",
+        flipped.len(),
+        mesh.faces.len()
+    )
+}
+
 fn push3(cols: &mut Vec<usize>, vals: &mut Vec<Real>, base: usize, v: &Vector3) {
     for k in 0..3 {
         cols.push(base + k);
@@ -144,13 +176,15 @@ pub(crate) fn optimise_indexed(
             index.closest(&Point3::from(c)).normal
         })
         .collect();
+    let flipped = flipped_faces(index, &initial);
+    if let Some(&f) = flipped.first() {
+        return Err(SurfaceError::Folded(format!(
+            "initial face {f} is flipped against the target ({})",
+            flipped_text(&initial, &flipped)
+        )));
+    }
     for f in 0..nf {
         let g = face_normal(&x, f);
-        if g.dot(&reference[f]) <= 0.0 {
-            return Err(SurfaceError::Folded(format!(
-                "initial face {f} is flipped against the target"
-            )));
-        }
         let nrm = g.normalize();
         x[nbase + 3 * f..nbase + 3 * f + 3].copy_from_slice(nrm.as_slice());
     }

@@ -100,23 +100,52 @@ pub fn initial_grid(
 
 /// The initial hub mesh: the automatic coarse layout subdivided where the footprint
 /// needs irregular vertices (`auto_layout.rs`), else the four-corner conformal grid.
+///
+/// A layout that does not fit the footprint starts with faces flipped against the target
+/// (an O-grid round the centre of a horseshoe's plan, which lies outside it; the
+/// courtyard's ring round an L-shaped courtyard): the next one is tried
+/// (`auto_layout::fallback`). Where every one folds, the error names each, how many faces
+/// fold and where, and the designer's layout as the lever.
 pub(crate) fn initial_mesh_indexed(
     index: &TargetIndex<'_>,
     opts: &SecondaryOptions,
 ) -> Result<QuadMesh, SurfaceError> {
-    match crate::auto_layout::coarse_layout(index)? {
-        Some(coarse) => {
-            let (area, h) = (index.mesh.area(), opts.unit_size);
-            if area < 4.0 * h * h {
-                return Err(SurfaceError::TooSmall(format!(
-                    "area {:.3} m^2 holds fewer than 4 units of {h} mm",
-                    area * 1e-6
-                )));
+    let mut tried: Vec<String> = Vec::new();
+    let mut next = Some(crate::auto_layout::coarse_layout(index)?);
+    while let Some((drawn, coarse)) = next {
+        let mesh = match coarse {
+            Some(coarse) => {
+                let (area, h) = (index.mesh.area(), opts.unit_size);
+                if area < 4.0 * h * h {
+                    return Err(SurfaceError::TooSmall(format!(
+                        "area {:.3} m^2 holds fewer than 4 units of {h} mm",
+                        area * 1e-6
+                    )));
+                }
+                crate::layout::layout_mesh_indexed(index, &coarse, opts)?
             }
-            crate::layout::layout_mesh_indexed(index, &coarse, opts)
+            None => initial_grid_indexed(index, opts)?,
+        };
+        let flipped = crate::optimise::flipped_faces(index, &mesh);
+        if flipped.is_empty() {
+            return Ok(mesh);
         }
-        None => initial_grid_indexed(index, opts),
+        tried.push(format!(
+            "{} ({})",
+            drawn.describe(),
+            crate::optimise::flipped_text(&mesh, &flipped)
+        ));
+        next = crate::auto_layout::fallback(index, drawn);
     }
+    let what = if tried.len() == 1 {
+        "the automatic layout folds"
+    } else {
+        "every automatic layout folds"
+    };
+    Err(SurfaceError::NeedsLayout(format!(
+        "{what}: {}; give the layout as a coarse quad mesh (--layout COARSE.obj or [surface] layout; docs/secondary.md, \"The designer's layout\")",
+        tried.join(", then ")
+    )))
 }
 
 fn initial_grid_indexed(
