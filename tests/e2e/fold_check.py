@@ -15,7 +15,9 @@ Checks
      Distance of our pins to frame.json `pins` must be <= 0.5 mm too.
   2. hub laps: hub plate rebuilt from the DXF slots, its corner facing the link
      moved to 3D, lap = (tip_f - tip_g) . e >= --min-overlap and within 0.1 mm
-     of links[].hub_overlap.
+     of links[].hub_overlap.  The two hub plates (seen along one's normal) overlap
+     along the line of centres by >= --min-overlap too: where the tips pass each
+     other offset sideways they overlap by less than the lap.
   3. (informational) largest primary gap and count of links whose facing
      primary sides pass through each other.
   4. bridges: each primary plate as the OUTSIDE outline cuts it (per tile side the
@@ -1281,6 +1283,10 @@ def main(argv=None):
     if one_lap_goal:
         row("hub lap off the one lap asked (mm)", "%.3f" % one_lap[0],
             "<= %g" % float(one_lap_goal["tolerance"]), one_lap[1] or "-", not one_lap_fail)
+    # the tips of a lap may pass each other offset sideways: the plates then overlap along
+    # the line of centres by less than the lap, and a lap weld has only that to hold on to
+    row("hub lap, the plates' overlap along the line of centres (mm)", "%.3f" % along_min[0],
+        ">= %g" % a.min_overlap, along_min[1] or "-", not along_short and laps_checked > 0)
     row("hub lap vs claim (mm)", "%.3g" % lap_claim[0], "<= %g" % LAP_CLAIM_TOL, lap_claim[1] or "-",
         not claim_fail and laps_checked > 0)
     row("bridge span, folded - flat (mm)", "%.3g" % span_w[1], "<= %g" % BRIDGE_TOL, span_w[0] or "-",

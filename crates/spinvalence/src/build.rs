@@ -824,32 +824,17 @@ fn strips_row(stage: &strips::StripsStage, frame: &sv_frame::FrameFile) -> Strin
     row
 }
 
-/// The fold check's failing rows as one warning line, if any fails, and one more where
-/// the plates of a hub lap do not overlap at all (an info row, not held, but such a lap
-/// cannot be welded as one).
+/// The fold check's failing rows as one warning line, if any fails.
 fn fold_warning(fold: &sv_frame::CheckReport) -> Option<String> {
     let failed = crate::check::failures(fold);
-    let mut lines = Vec::new();
-    if !failed.is_empty() {
-        lines.push(format!(
+    (!failed.is_empty()).then(|| {
+        format!(
             "warning: fold check: {} of {} rows fail on the parts as cut: {}",
             failed.len(),
             fold.rows.len(),
             failed.join("; ")
-        ));
-    }
-    let apart = fold
-        .rows
-        .iter()
-        .find(|r| r.name == sv_strips::LAP_OVERLAP_ROW && r.worst <= 0.0);
-    if let Some(row) = apart {
-        lines.push(format!(
-            "warning: fold check: hub laps whose plates do not overlap at all, their tips \
-             passing each other offset sideways (docs/geometry.md 5.5): {}",
-            row.at
-        ));
-    }
-    (!lines.is_empty()).then(|| lines.join("\n"))
+        )
+    })
 }
 
 fn paths_text(paths: &[std::path::PathBuf]) -> String {

@@ -283,8 +283,11 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     let mut laps = Worst::min("hub lap as cut (mm, smallest)", limits.min_overlap);
     // the lap is how far the tips pass each other along the line of centres; where they
     // pass offset sideways the plates overlap along that line by less, and not at all once
-    // the offset reaches the lap: what a lap weld has to hold on to (not held yet)
-    let mut overlaps = Worst::min(LAP_OVERLAP_ROW, Real::NEG_INFINITY);
+    // the offset reaches the lap: what a lap weld has to hold on to, the weld minimum too
+    let mut overlaps = Worst::min(
+        "hub lap, the plates' overlap along the line of centres (mm, smallest)",
+        limits.min_overlap,
+    );
     let (mut overlaps_short, mut overlaps_none) = (0, 0);
     let mut claims = Worst::max(
         "hub lap = frame.json hub_overlap (mm)",
@@ -485,25 +488,21 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         ])
         .map(Worst::row)
         .collect();
-    // the two rows of the laps' plates count the laps that miss, and name the lever where
-    // it was not pulled
-    let lever = |missing: usize, what: &str| {
-        if missing > 0 && !touch {
-            format!(" ([frame] laps_touch = true {what})")
-        } else {
-            String::new()
-        }
+    // the two rows of the laps' plates count the laps that miss, and the closest gap's
+    // names the lever where it was not pulled
+    let lever = if laps_apart > 0 && !touch {
+        " ([frame] laps_touch = true pulls them together)"
+    } else {
+        ""
     };
     let counts = [
         format!(
-            "{overlaps_short} laps overlap less than {} mm along it, {overlaps_none} not at all{}",
+            "{overlaps_short} laps overlap less than {} mm along it, {overlaps_none} not at all",
             limits.min_overlap,
-            lever(overlaps_short, "keeps the tips in line")
         ),
         format!(
-            "{laps_apart} of {laps_seen} laps more than {} mm apart everywhere{}",
+            "{laps_apart} of {laps_seen} laps more than {} mm apart everywhere{lever}",
             limits.weld_gap,
-            lever(laps_apart, "pulls them together")
         ),
     ];
     for (check, counts) in [overlaps, apart].into_iter().zip(counts) {
@@ -521,11 +520,6 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     rows.push(under_upper.row());
     CheckReport { rows }
 }
-
-/// The fold check's row of how far the plates of each hub lap overlap along the line of
-/// centres (an info row: a smallest of 0 is a lap whose plates do not overlap at all).
-pub const LAP_OVERLAP_ROW: &str =
-    "hub lap, the plates' overlap along the line of centres (mm, smallest; not held)";
 
 fn centroid(q: &[Point3; 4]) -> Point3 {
     Point3::from(q.iter().fold(Vector3::zeros(), |a, p| a + p.coords) / 4.0)

@@ -50,7 +50,7 @@ pub use drc::{check_profile, DrcRule, Violation, DRC_ARC_TOLERANCE};
 pub use error::StripsError;
 pub use face::{hub_face, FaceMark, HubFace};
 pub use file::{FlatTile, PinRecord, StripRecord, StripsFile, StripsParams, STRIPS_FORMAT};
-pub use fold::{fold_check, FoldLimits, LAP_OVERLAP_ROW};
+pub use fold::{fold_check, FoldLimits};
 pub use params::{
     ProfileParams, SplitRule, StripDirection, StripOptions, BRIDGE_STRAIN, DEFAULT_SHEET_LENGTH,
     DEFAULT_SHEET_MARGIN, MIN_INSIDE_RADIUS,

@@ -42,6 +42,13 @@ pub const CLEARANCE: Real = 1.0;
 /// relief crosses the upper plate's corner: 1 mm frees none, 1.25 mm it (measured on every
 /// point of the relief, its round end too; both fold checks report the deepest as cut).
 pub const UNDER_EDGE: Real = 1.5;
+/// What a relief's web keeps beyond halfway between a neck and a leg ([`relief_web`]) (mm),
+/// and, where no relief keeps that even under the upper plate's edge, in the search's last
+/// tier: a web narrower than halfway is taken for a neck by both fold checks, and at 2.5 mm
+/// sheet 11.5 mm is still half again as wide as a neck (7.5). Measured: on the saddle at
+/// 300 mm with the tips of its laps kept in line (docs/geometry.md 5.5) four legs missed
+/// the first margin by 0.1-0.7 mm.
+pub const WEB_MARGINS: [Real; 2] = [1.0, 0.25];
 
 /// A relief in a unit's hub plate, in the strip's flat frame: a straight notch `width`
 /// across, from its round closed end (past the leg's section) to its open end (in the hook
@@ -80,7 +87,7 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
     if !frame.joints_closed() {
         return Ok(());
     }
-    let min_web = relief_web(&widths).max(crate::params::min_web(thickness));
+    let webs = WEB_MARGINS.map(|m| relief_web(&widths, m).max(crate::params::min_web(thickness)));
     // every unit placed, and its legs posed at every roll, once
     let mut at: HashMap<usize, (usize, usize)> = HashMap::new();
     let mut placed: HashMap<usize, (Placed, Vec<[Point3; 4]>)> = HashMap::new();
@@ -121,7 +128,7 @@ pub fn add_reliefs(frame: &FrameFile, strips: &mut [FlatStrip]) -> Result<(), St
                 // where no notch can clear the leg, none is cut: the fold check names the
                 // leg that runs through the plate there
                 let Some((outline, width, lead)) =
-                    relief_for(&convex_hull(&sections), pf, pg, &widths, min_web, existing)
+                    relief_for(&convex_hull(&sections), pf, pg, &widths, webs, existing)
                 else {
                     continue;
                 };
@@ -283,13 +290,15 @@ impl Rules<'_> {
 /// hook slots beside `upper`'s hub plate ([`Relief`]): its outline, width and lead run;
 /// `None` where no notch keeps to the rules. A straight notch where one does, the
 /// shortest; else one bent once, the shortest of those; where neither stays out from under
-/// the upper plate, the same search again with [`UNDER_EDGE`] under its edge allowed.
+/// the upper plate, the same search again with [`UNDER_EDGE`] under its edge allowed; where
+/// none keeps the web `webs[0]` even so, the same once more with `webs[1]` (the narrower
+/// of [`WEB_MARGINS`]).
 fn relief_for(
     section: &[Point2],
     upper: &Placed,
     lower: &Placed,
     widths: &CutWidths,
-    min_web: Real,
+    webs: [Real; 2],
     existing: &[Relief],
 ) -> Option<([Point2; 4], Real, Option<[Point2; 2]>)> {
     let inverse = lower.hub.inverse();
@@ -343,7 +352,12 @@ fn relief_for(
     };
     // out from under the upper plate where any relief can be, else under its edge by at
     // most UNDER_EDGE
-    for under_edge in [None, Some(UNDER_EDGE)] {
+    let tiers = [
+        (None, webs[0]),
+        (Some(UNDER_EDGE), webs[0]),
+        (Some(UNDER_EDGE), webs[1]),
+    ];
+    for (under_edge, min_web) in tiers {
         let rules = Rules {
             upper_ccw: &upper_ccw,
             under_edge,
@@ -526,10 +540,10 @@ fn fits(notch: &Notch, rules: &Rules) -> bool {
 }
 
 /// The least web a relief leaves to any other cut: wider than any neck-like web, halfway
-/// between a neck and a leg, and a millimetre more (a web as narrow as a neck would act as
-/// one, and the fold check would take it for one).
-pub(crate) fn relief_web(widths: &CutWidths) -> Real {
-    (widths.neck + widths.leg) / 2.0 + 1.0
+/// between a neck and a leg, and `margin` more (a web as narrow as a neck would act as one,
+/// and the fold check would take it for one).
+pub(crate) fn relief_web(widths: &CutWidths, margin: Real) -> Real {
+    (widths.neck + widths.leg) / 2.0 + margin
 }
 
 /// How far from a neck's centre the fold check looks for the neck (the narrowest web

@@ -722,13 +722,19 @@ impl Problem<'_> {
                 None if laps => (o.min_overlap + LAP_MARGIN - lap).max(0.0),
                 None => 0.0,
             };
-            // pulled together, the tips could slide past each other sideways until the
-            // plates no longer overlap (the lap, along the line of centres, stays): the lap
-            // less the tips' offset, which is how far right-angled tips overlap along that
-            // line, at least half the weld minimum. Measured: with the overlap itself
-            // (`lap_overlap_length`) held instead, welds stayed open on the vault or the
-            // saddle (docs/geometry.md 5.5)
-            let aligned = (0.5 * o.min_overlap - (lap - tips_offset(&a, k, &b, m))).max(0.0);
+            // the tips may pass each other offset sideways until the plates no longer
+            // overlap while the lap, along the line of centres, stays (the default saddle
+            // had 6 such laps, the vault 1, the dome with its laps held to one length 31):
+            // the lap less the tips' offset, which is how far right-angled tips overlap
+            // along that line, at least half the weld minimum. Measured: with the overlap
+            // itself (`lap_overlap_length`) held instead, welds stayed open on the vault or
+            // the saddle (docs/geometry.md 5.5). Without a weld minimum (studies: hubs
+            // that may miss each other) there is no lap to keep in line
+            let aligned = if o.min_overlap > 0.0 {
+                (0.5 * o.min_overlap - (lap - tips_offset(&a, k, &b, m))).max(0.0)
+            } else {
+                0.0
+            };
             // the mid-planes' distance where the two plates come closest, the upper one's
             // over the lower one's: at least a thickness (and a margin), and at most a
             // thickness and what a weld bridges, so that the plates touch somewhere
@@ -754,7 +760,7 @@ impl Problem<'_> {
             lap_weight * on(now[0]),
             into_weight * on(now[1]),
             apart_weight * on(now[2]),
-            apart_weight * on(now[3]),
+            W_STACK * on(now[3]),
         ];
         let grads = if grad && weights.iter().any(|&w| w > 0.0) {
             fd_jac(&pts, h, hub_rows)
