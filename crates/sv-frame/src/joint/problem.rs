@@ -728,9 +728,13 @@ impl Problem<'_> {
             // the lap less the tips' offset, which is how far right-angled tips overlap
             // along that line, at least half the weld minimum. Measured: with the overlap
             // itself (`lap_overlap_length`) held instead, welds stayed open on the vault or
-            // the saddle (docs/geometry.md 5.5). Without a weld minimum (studies: hubs
-            // that may miss each other) there is no lap to keep in line
+            // the saddle (docs/geometry.md 5.5). Hubs that miss each other count as
+            // meeting here: the lap's own row brings them together, and this one must not
+            // pull against it (on hub meshes far from planar, the annulus at 300 mm, laps
+            // of -40 mm made it pull the faces out of shape). Without a weld minimum
+            // (studies: hubs that may miss each other) there is no lap to keep in line
             let aligned = if o.min_overlap > 0.0 {
+                let lap = lap.max(0.0);
                 (0.5 * o.min_overlap - (lap - tips_offset(&a, k, &b, m))).max(0.0)
             } else {
                 0.0
