@@ -684,7 +684,7 @@ fn a_target_no_automatic_layout_fits_names_the_layouts_the_place_and_the_lever()
     ]);
     out.expect_code(2);
     let line = out.one_error_line();
-    assert!(line.contains("l_courtyard.obj: no automatic layout: every automatic layout folds: the ring of 8 faces round the courtyard ("), "{line}");
+    assert!(line.contains("l_courtyard.obj: no automatic layout: every layout tried starts folded or with collapsed edges: the ring of 8 faces round the courtyard ("), "{line}");
     assert!(
         line.contains(
             "then the ring of 8 faces joining the two loops at equal shares of their lengths ("

@@ -83,6 +83,42 @@ pub(crate) fn flipped_text(mesh: &QuadMesh, flipped: &[usize]) -> String {
     )
 }
 
+/// What keeps the optimiser from moving `mesh` at all, for a message: faces flipped
+/// against the target ([`flipped_text`]), else edges shorter than [`COLLAPSE_FRACTION`] of
+/// the mean edge (every step it tries would collapse them further or leave them so: the
+/// optimiser returns the mesh untouched, and the primary solve then fails on its slivers).
+pub(crate) fn start_fault(index: &TargetIndex<'_>, mesh: &QuadMesh) -> Option<String> {
+    let flipped = flipped_faces(index, mesh);
+    if !flipped.is_empty() {
+        return Some(flipped_text(mesh, &flipped));
+    }
+    let edges: Vec<(Real, Point3)> = mesh
+        .faces
+        .iter()
+        .flat_map(|f| (0..4).map(move |k| (f[k], f[(k + 1) % 4])))
+        .filter(|(a, b)| a < b)
+        .map(|(a, b)| {
+            let (p, q) = (mesh.vertices[a], mesh.vertices[b]);
+            ((q - p).norm(), Point3::from((p.coords + q.coords) / 2.0))
+        })
+        .collect();
+    let mean = edges.iter().map(|e| e.0).sum::<Real>() / edges.len().max(1) as Real;
+    let short: Vec<&(Real, Point3)> = edges
+        .iter()
+        .filter(|e| e.0 < COLLAPSE_FRACTION * mean)
+        .collect();
+    let (length, at) = short.iter().min_by(|a, b| a.0.total_cmp(&b.0))?;
+    Some(format!(
+        "{} of {} edges shorter than {COLLAPSE_FRACTION} of the mean edge ({mean:.0} mm), the \
+         shortest {length:.0} mm at ({:.0}, {:.0}, {:.0}) mm",
+        short.len(),
+        edges.len(),
+        at.x,
+        at.y,
+        at.z
+    ))
+}
+
 fn push3(cols: &mut Vec<usize>, vals: &mut Vec<Real>, base: usize, v: &Vector3) {
     for k in 0..3 {
         cols.push(base + k);

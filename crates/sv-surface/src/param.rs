@@ -103,9 +103,10 @@ pub fn initial_grid(
 ///
 /// A layout that does not fit the footprint starts with faces flipped against the target
 /// (an O-grid round the centre of a horseshoe's plan, which lies outside it; the
-/// courtyard's ring round an L-shaped courtyard): the next one is tried
-/// (`auto_layout::fallback`). Where every one folds, the error names each, how many faces
-/// fold and where, and the designer's layout as the lever.
+/// courtyard's ring round an L-shaped courtyard) or with edges the optimiser takes for
+/// collapsed (one face per corner where the centre lies by a boomerang's inner bend): the
+/// next one is tried (`auto_layout::fallback`). Where none fits, the error names each,
+/// what is wrong with it and where, and the designer's layout as the lever.
 pub(crate) fn initial_mesh_indexed(
     index: &TargetIndex<'_>,
     opts: &SecondaryOptions,
@@ -126,21 +127,16 @@ pub(crate) fn initial_mesh_indexed(
             }
             None => initial_grid_indexed(index, opts)?,
         };
-        let flipped = crate::optimise::flipped_faces(index, &mesh);
-        if flipped.is_empty() {
+        let Some(fault) = crate::optimise::start_fault(index, &mesh) else {
             return Ok(mesh);
-        }
-        tried.push(format!(
-            "{} ({})",
-            drawn.describe(),
-            crate::optimise::flipped_text(&mesh, &flipped)
-        ));
+        };
+        tried.push(format!("{} ({fault})", drawn.describe()));
         next = crate::auto_layout::fallback(index, drawn);
     }
     let what = if tried.len() == 1 {
-        "the automatic layout folds"
+        "the layout drawn starts folded or with collapsed edges"
     } else {
-        "every automatic layout folds"
+        "every layout tried starts folded or with collapsed edges"
     };
     Err(SurfaceError::NeedsLayout(format!(
         "{what}: {}; give the layout as a coarse quad mesh (--layout COARSE.obj or [surface] layout; docs/secondary.md, \"The designer's layout\")",
