@@ -51,16 +51,26 @@ const FAR_MOVE: Real = 0.5;
 const REACH_GROWTH: Real = 1.5;
 const REACH_MAX: Real = 10.0;
 
-/// Faces of `mesh` whose normal (the cross product of its diagonals) points away from the
-/// target's normal at the point of the target closest to the face's centre: a mesh that
-/// starts with one cannot be optimised (the optimiser keeps every face unfolded).
-pub(crate) fn flipped_faces(index: &TargetIndex<'_>, mesh: &QuadMesh) -> Vec<usize> {
+/// The target's normal at the point of the target closest to each face's centre: which
+/// way each face of `mesh` must face.
+fn target_normals(index: &TargetIndex<'_>, mesh: &QuadMesh) -> Vec<Vector3> {
+    (0..mesh.faces.len())
+        .map(|f| {
+            let q = mesh.face_points(f);
+            let centre = Point3::from(q.iter().map(|p| p.coords).sum::<Vector3>() / 4.0);
+            index.closest(&centre).normal
+        })
+        .collect()
+}
+
+/// Faces of `mesh` whose normal (the cross product of its diagonals) points away from
+/// `reference` ([`target_normals`]): a mesh that starts with one cannot be optimised (the
+/// optimiser keeps every face unfolded).
+fn flipped_against(mesh: &QuadMesh, reference: &[Vector3]) -> Vec<usize> {
     (0..mesh.faces.len())
         .filter(|&f| {
             let q = mesh.face_points(f);
-            let centre = Point3::from(q.iter().map(|p| p.coords).sum::<Vector3>() / 4.0);
-            let g = (q[0] - q[2]).cross(&(q[1] - q[3]));
-            g.dot(&index.closest(&centre).normal) <= 0.0
+            (q[0] - q[2]).cross(&(q[1] - q[3])).dot(&reference[f]) <= 0.0
         })
         .collect()
 }
@@ -88,23 +98,25 @@ pub(crate) fn flipped_text(mesh: &QuadMesh, flipped: &[usize]) -> String {
 /// the mean edge (every step it tries would collapse them further or leave them so: the
 /// optimiser returns the mesh untouched, and the primary solve then fails on its slivers).
 pub(crate) fn start_fault(index: &TargetIndex<'_>, mesh: &QuadMesh) -> Option<String> {
-    let flipped = flipped_faces(index, mesh);
+    let flipped = flipped_against(mesh, &target_normals(index, mesh));
     if !flipped.is_empty() {
         return Some(flipped_text(mesh, &flipped));
     }
-    let edges: Vec<(Real, Point3)> = mesh
-        .faces
+    // every edge once, measured against the optimiser's own scale
+    let mut edges = std::collections::BTreeSet::new();
+    for f in &mesh.faces {
+        for k in 0..4 {
+            let (a, b) = (f[k], f[(k + 1) % 4]);
+            edges.insert((a.min(b), a.max(b)));
+        }
+    }
+    let mean = mesh.mean_edge();
+    let short: Vec<(Real, Point3)> = edges
         .iter()
-        .flat_map(|f| (0..4).map(move |k| (f[k], f[(k + 1) % 4])))
-        .filter(|(a, b)| a < b)
-        .map(|(a, b)| {
+        .map(|&(a, b)| {
             let (p, q) = (mesh.vertices[a], mesh.vertices[b]);
             ((q - p).norm(), Point3::from((p.coords + q.coords) / 2.0))
         })
-        .collect();
-    let mean = edges.iter().map(|e| e.0).sum::<Real>() / edges.len().max(1) as Real;
-    let short: Vec<&(Real, Point3)> = edges
-        .iter()
         .filter(|e| e.0 < COLLAPSE_FRACTION * mean)
         .collect();
     let (length, at) = short.iter().min_by(|a, b| a.0.total_cmp(&b.0))?;
@@ -202,17 +214,8 @@ pub(crate) fn optimise_indexed(
         (q[0] - q[2]).cross(&(q[1] - q[3]))
     };
     // orientation reference: the target normal at each face
-    let reference: Vec<Vector3> = (0..nf)
-        .map(|f| {
-            let c = faces[f]
-                .iter()
-                .map(|&v| initial.vertices[v].coords)
-                .sum::<Vector3>()
-                / 4.0;
-            index.closest(&Point3::from(c)).normal
-        })
-        .collect();
-    let flipped = flipped_faces(index, &initial);
+    let reference = target_normals(index, &initial);
+    let flipped = flipped_against(&initial, &reference);
     if let Some(&f) = flipped.first() {
         return Err(SurfaceError::Folded(format!(
             "initial face {f} is flipped against the target ({})",
