@@ -37,6 +37,7 @@
 //! | `annulus_roof.obj` | paraboloid z = 900 - x^2 / 12000 - y^2 / 9000 | ellipse 3.2 x 2.6 m around a 1.2 x 0.9 m courtyard |
 //! | `torus_patch.obj` | torus R = 3 m, r = 1.5 m, both curvature signs | two meridians and two parallels |
 //! | `horseshoe.obj` | paraboloid z = 900 - r^2 / 15000 | a 1.5 m wide band bent round a half circle (R 2.25 m), half-round ends: no corner, its centre outside the plan |
+//! | `two_courtyards.obj` | paraboloid z = 900 - x^2 / 16000 - y^2 / 12000 | rectangle 8 x 5 m round two rectangular courts (1.6 x 2.0 and 2.0 x 2.2 m): three boundary loops, 200 mm cells |
 //!
 //! The frame's acceptance (docs/geometry.md, "Closing the joints") adds `hypar_square.obj`,
 //! z = (x^2 - y^2) / 12000 over a 3.6 x 3.6 m square along its principal directions.
@@ -327,6 +328,45 @@ fn horseshoe_height(x: f64, y: f64) -> f64 {
     900.0 - (x * x + y * y) / 15000.0
 }
 
+/// A roof round two courtyards: an 8 x 5 m rectangle of 200 mm cells (two triangles each)
+/// less the cells of two rectangular courts, lifted onto a paraboloid; only the vertices of
+/// the cells kept are written.
+fn two_courtyards_obj() -> String {
+    let (nx, ny, cell) = (40usize, 25usize, 200.0);
+    let courts = [(5..13, 6..16), (23..33, 8..19)];
+    let kept = |i: usize, j: usize| {
+        !courts
+            .iter()
+            .any(|(ci, cj)| ci.contains(&i) && cj.contains(&j))
+    };
+    let mut id = vec![0usize; (nx + 1) * (ny + 1)];
+    let mut out = String::from("# spinvalence acceptance target two_courtyards, mm, Z up\n");
+    let mut next = 1;
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let used = (i.saturating_sub(1)..=i.min(nx - 1))
+                .any(|a| (j.saturating_sub(1)..=j.min(ny - 1)).any(|b| kept(a, b)));
+            if used {
+                let (x, y) = (-4000.0 + cell * i as f64, -2500.0 + cell * j as f64);
+                let z = 900.0 - x * x / 16000.0 - y * y / 12000.0;
+                let _ = writeln!(out, "v {x:.1} {y:.1} {z:.1}");
+                id[j * (nx + 1) + i] = next;
+                next += 1;
+            }
+        }
+    }
+    let at = |i: usize, j: usize| id[j * (nx + 1) + i];
+    for j in 0..ny {
+        for i in 0..nx {
+            if kept(i, j) {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                let _ = writeln!(out, "f {a} {b} {c}\nf {a} {c} {d}");
+            }
+        }
+    }
+    out
+}
+
 /// Points of an ellipse with semi-axes `a`, `b` about `centre`, counter-clockwise.
 fn ellipse(a: f64, b: f64, centre: (f64, f64), n: usize) -> Vec<(f64, f64)> {
     (0..n)
@@ -412,6 +452,7 @@ fn footprints() -> Vec<(&'static str, String)> {
             ),
         ),
         ("horseshoe", horseshoe_obj()),
+        ("two_courtyards", two_courtyards_obj()),
     ]
 }
 

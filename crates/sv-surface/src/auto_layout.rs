@@ -18,17 +18,17 @@
 //! | two boundary loops side by side or one over the other (a tube) | a ring of eight faces along it | none |
 //!
 //! Everything else (four corners, one or two corners, several reflex corners) goes to
-//! the four-corner grid. A layout whose subdivision starts with a face flipped against the
-//! target does not fit the footprint (an O-grid round a horseshoe's centre, which lies
-//! outside its plan; the courtyard's ring round an L-shaped court): [`fallback`] names the
-//! one `param.rs` tries next, and [`Drawn::describe`] names each in the error where all
-//! fold.
+//! the four-corner grid; three or more boundary loops to none of these. A layout whose
+//! subdivision starts with a face flipped against the target does not fit the footprint (an
+//! O-grid round a horseshoe's centre, which lies outside its plan; the courtyard's ring
+//! round an L-shaped court): [`fallback`] names the one `param.rs` tries next, and
+//! [`Drawn::describe`] names each in the report's layout. After them all comes the
+//! triangulated footprint (`triangle_layout.rs`).
 
 use sv_frame::QuadMesh;
 use sv_geom::{Point3, Real, Vector3};
 
 use crate::target::{loop_arc, loop_at, TargetIndex};
-use crate::SurfaceError;
 
 /// Boundary turning above which a point is a corner of the footprint.
 const CORNER_TURN: Real = std::f64::consts::FRAC_PI_4;
@@ -42,14 +42,14 @@ const O_GRID_INNER: Real = 0.7;
 
 /// A corner of a boundary loop: its position in the loop and whether it turns inwards.
 #[derive(Clone, Copy, Debug)]
-struct Corner {
-    at: usize,
+pub(crate) struct Corner {
+    pub(crate) at: usize,
     reflex: bool,
 }
 
 /// Corners of the outer loop in loop order: local maxima of the turning over `window`
 /// either side, above [`CORNER_TURN`], at least two windows apart.
-fn corners(index: &TargetIndex<'_>, lp: &[usize], window: Real) -> Vec<Corner> {
+pub(crate) fn corners(index: &TargetIndex<'_>, lp: &[usize], window: Real) -> Vec<Corner> {
     let v = &index.mesh.vertices;
     let arc = loop_arc(v, lp);
     let turn_over = |k: usize, w: Real| {
@@ -152,10 +152,10 @@ fn corner_counts(index: &TargetIndex<'_>) -> (usize, usize) {
 }
 
 /// The automatic layout of `index`'s target: which one, and its coarse quad mesh, which
-/// is `None` for the four-corner grid (see the module documentation).
-pub(crate) fn coarse_layout(
-    index: &TargetIndex<'_>,
-) -> Result<(Drawn, Option<QuadMesh>), SurfaceError> {
+/// is `None` for the four-corner grid (see the module documentation); `None` for three or
+/// more boundary loops (a roof with two courtyards), which only the triangulated layout
+/// (`triangle_layout.rs`) and a designer's follow.
+pub(crate) fn coarse_layout(index: &TargetIndex<'_>) -> Option<(Drawn, Option<QuadMesh>)> {
     let v = &index.mesh.vertices;
     match index.loops.len() {
         1 => {}
@@ -165,14 +165,9 @@ pub(crate) fn coarse_layout(
             } else {
                 (Drawn::Tube, tube(index))
             };
-            return Ok((ring.0, Some(ring.1)));
+            return Some((ring.0, Some(ring.1)));
         }
-        n => {
-            return Err(SurfaceError::NeedsLayout(format!(
-                "the target has {n} boundary loops (a roof with {} courtyards); the automatic layout handles one or two: give the layout as a coarse quad mesh (--layout COARSE.obj, [surface] layout)",
-                n - 1
-            )))
-        }
+        _ => return None,
     }
     let lp = &index.boundary;
     let window = index.perimeter() / 40.0;
@@ -232,9 +227,9 @@ pub(crate) fn coarse_layout(
             let faces = vec![[3, 6, 0, 7], [6, 4, 5, 0], [7, 0, 1, 2]];
             (Drawn::ReflexCorner, QuadMesh { vertices, faces })
         }
-        _ => return Ok((Drawn::FourCorner { convex, reflex }, None)),
+        _ => return Some((Drawn::FourCorner { convex, reflex }, None)),
     };
-    Ok((layout.0, Some(layout.1)))
+    Some((layout.0, Some(layout.1)))
 }
 
 /// Boundary points where the loop is extreme along the target frame's diagonals, in loop

@@ -35,6 +35,7 @@ mod param;
 mod report;
 mod target;
 mod topology;
+mod triangle_layout;
 
 pub use anchors::TargetSurface;
 pub use builtin::{builtin_target, BUILTIN_NAMES, DEFAULT_BUILTIN};
@@ -58,8 +59,11 @@ pub fn build_secondary(
 ) -> Result<(QuadMesh, SecondaryReport), SurfaceError> {
     opts.check()?;
     let index = target::TargetIndex::new(target)?;
-    let initial = param::initial_mesh_indexed(&index, opts)?;
-    optimise::optimise_indexed(&index, initial, opts, optimise::Pins::Corners, progress)
+    let (initial, layout) = param::initial_mesh_indexed(&index, opts)?;
+    let (mesh, mut report) =
+        optimise::optimise_indexed(&index, initial, opts, optimise::Pins::Corners, progress)?;
+    report.layout = layout;
+    Ok((mesh, report))
 }
 
 /// Target surface and the designer's coarse quad layout to optimised hub mesh:
@@ -74,11 +78,16 @@ pub fn build_secondary_with_layout(
     opts.check()?;
     let index = target::TargetIndex::new(target)?;
     let mesh = layout::layout_mesh_indexed(&index, layout, opts)?;
-    optimise::optimise_indexed(
+    let (mesh, mut report) = optimise::optimise_indexed(
         &index,
         mesh,
         opts,
         optimise::Pins::CornersAndIrregular,
         progress,
-    )
+    )?;
+    report.layout = format!(
+        "the designer's layout ({} coarse faces)",
+        layout.faces.len()
+    );
+    Ok((mesh, report))
 }

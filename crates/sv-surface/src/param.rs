@@ -95,7 +95,7 @@ pub fn initial_grid(
 ) -> Result<QuadMesh, SurfaceError> {
     opts.check()?;
     let index = TargetIndex::new(target)?;
-    initial_mesh_indexed(&index, opts)
+    Ok(initial_mesh_indexed(&index, opts)?.0)
 }
 
 /// The initial hub mesh: the automatic coarse layout subdivided where the footprint
@@ -106,13 +106,22 @@ pub fn initial_grid(
 /// courtyard's ring round an L-shaped courtyard) or with edges the optimiser takes for
 /// collapsed (one face per corner where the centre lies by a boomerang's inner bend): the
 /// next one is tried (`auto_layout::fallback`). Where none fits, the error names each,
-/// what is wrong with it and where, and the designer's layout as the lever.
+/// what is wrong with it and where, and the designer's layout as the lever; the last
+/// resort, the footprint triangulated (`triangle_layout.rs`), fits any footprint that is one
+/// sheet over its plane. With the mesh comes the layout's name, and where it is not the
+/// first, the ones tried before it.
 pub(crate) fn initial_mesh_indexed(
     index: &TargetIndex<'_>,
     opts: &SecondaryOptions,
-) -> Result<QuadMesh, SurfaceError> {
+) -> Result<(QuadMesh, String), SurfaceError> {
     let mut tried: Vec<String> = Vec::new();
-    let mut next = Some(crate::auto_layout::coarse_layout(index)?);
+    let mut next = crate::auto_layout::coarse_layout(index);
+    if next.is_none() {
+        tried.push(format!(
+            "the rings and grids (for one or two boundary loops; the target has {})",
+            index.loops.len()
+        ));
+    }
     while let Some((drawn, coarse)) = next {
         let mesh = match coarse {
             Some(coarse) => {
@@ -128,10 +137,24 @@ pub(crate) fn initial_mesh_indexed(
             None => initial_grid_indexed(index, opts)?,
         };
         let Some(fault) = crate::optimise::start_fault(index, &mesh) else {
-            return Ok(mesh);
+            return Ok((mesh, named(drawn.describe(), &tried)));
         };
         tried.push(format!("{} ({fault})", drawn.describe()));
         next = crate::auto_layout::fallback(index, drawn);
+    }
+    // the last resort: any footprint that is one sheet over its plane
+    let side = crate::triangle_layout::TRIANGLE_SIDE * opts.unit_size;
+    match crate::triangle_layout::triangle_layout(index, side) {
+        Some(coarse) => {
+            let mesh = crate::layout::layout_mesh_indexed(index, &coarse, opts)?;
+            match crate::optimise::start_fault(index, &mesh) {
+                None => return Ok((mesh, named(TRIANGULATED.into(), &tried))),
+                Some(fault) => tried.push(format!("{TRIANGULATED} ({fault})")),
+            }
+        }
+        None => tried.push(format!(
+            "{TRIANGULATED} (the footprint is not one sheet over the target's plane)"
+        )),
     }
     let what = if tried.len() == 1 {
         "the layout drawn starts folded or with collapsed edges"
@@ -142,6 +165,22 @@ pub(crate) fn initial_mesh_indexed(
         "{what}: {}; give the layout as a coarse quad mesh (--layout COARSE.obj or [surface] layout; docs/secondary.md, \"The designer's layout\")",
         tried.join(", then ")
     )))
+}
+
+/// The last automatic layout in the words of the messages.
+const TRIANGULATED: &str = "the footprint triangulated in plan, its triangles paired into quads \
+     and split (irregular vertices wherever the triangulation puts them)";
+
+/// A layout's name and the ones tried before it that did not fit.
+fn named(layout: String, tried: &[String]) -> String {
+    if tried.is_empty() {
+        layout
+    } else {
+        format!(
+            "{layout}, after {} (a layout of your own: --layout COARSE.obj)",
+            tried.join(", then ")
+        )
+    }
 }
 
 fn initial_grid_indexed(

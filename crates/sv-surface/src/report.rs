@@ -71,6 +71,10 @@ pub struct SecondaryReport {
     pub iterations: usize,
     /// Goals not met, one line each naming the worst place. Empty when all goals hold.
     pub unmet: Vec<String>,
+    /// The layout the hub mesh was drawn from, and the automatic ones tried before it
+    /// that did not fit (empty where the mesh was only measured).
+    #[serde(default)]
+    pub layout: String,
 }
 
 /// Acceptance goals checked into [`SecondaryReport::unmet`].
@@ -156,6 +160,7 @@ pub(crate) fn measure(
         non_convex_faces: Vec::new(),
         iterations,
         unmet: Vec::new(),
+        layout: String::new(),
     };
     let mut good = 0usize;
     let (mut side_min_face, mut side_max_face) = (0, 0);

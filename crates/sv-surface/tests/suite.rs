@@ -364,24 +364,71 @@ fn a_horseshoe_gets_the_four_corner_grid_where_the_o_grid_folds() {
     assert!(r.unmet.iter().any(|l| l.starts_with("coverage")), "{r:?}");
 }
 
+/// Whether every face of `mesh` faces up (its diagonals' cross product), no edge is shorter
+/// than a fifth of the mean edge (what the optimiser takes for collapsed), and every face
+/// centre lies over `target` in plan (inside one of its triangles, not over a court).
+fn unfolded_and_over_the_target(mesh: &QuadMesh, target: &sv_surface::TargetMesh) -> bool {
+    let up = (0..mesh.faces.len()).all(|f| {
+        let p = mesh.face_points(f);
+        (p[0] - p[2]).cross(&(p[1] - p[3])).z > 0.0
+    });
+    let edges: Vec<f64> = mesh
+        .faces
+        .iter()
+        .flat_map(|f| (0..4).map(|k| (mesh.vertices[f[k]] - mesh.vertices[f[(k + 1) % 4]]).norm()))
+        .collect();
+    let mean = edges.iter().sum::<f64>() / edges.len() as f64;
+    let v = &target.vertices;
+    let over = |x: f64, y: f64| {
+        target.triangles.iter().any(|t| {
+            let side = |a: usize, b: usize| {
+                (v[b].x - v[a].x) * (y - v[a].y) - (v[b].y - v[a].y) * (x - v[a].x)
+            };
+            let s = [side(t[0], t[1]), side(t[1], t[2]), side(t[2], t[0])];
+            s.iter().all(|&d| d >= 0.0) || s.iter().all(|&d| d <= 0.0)
+        })
+    };
+    let centres_over = (0..mesh.faces.len()).all(|f| {
+        let p = mesh.face_points(f);
+        over(
+            p.iter().map(|q| q.x).sum::<f64>() / 4.0,
+            p.iter().map(|q| q.y).sum::<f64>() / 4.0,
+        )
+    });
+    up && edges.iter().all(|&e| e >= 0.2 * mean) && centres_over
+}
+
 /// A boomerang (fixtures/targets/boomerang.obj: three sharp tips, a round inner bend):
 /// one face per corner puts the centre by the bend, where its faces are slivers, and the
 /// four-corner grid has an edge as short there. The optimiser cannot move a mesh with an
 /// edge under a fifth of the mean (it returned it untouched, and the primary solve failed
-/// naming a unit); now the error names both layouts, what is wrong with each and where
-/// (by the bend, x = 0), and the designer's layout as the lever.
+/// naming a unit). Both are named with what is wrong and where (by the bend, x = 0), and
+/// the last layout, the footprint triangulated, is drawn: it starts unfolded with no
+/// collapsed edge and its irregular vertices where the triangulation put them.
 #[test]
-fn a_layout_that_starts_with_collapsed_edges_is_named_with_its_place() {
+fn a_layout_that_starts_with_collapsed_edges_gives_way_to_the_triangulated_footprint() {
     let target = load("boomerang.obj");
-    let why = initial_grid(&target, &opts(300.0)).unwrap_err().to_string();
-    assert!(why.contains("one face per corner (3 corners"), "{why}");
+    let start = initial_grid(&target, &opts(300.0)).unwrap();
+    assert!(unfolded_and_over_the_target(&start, &target));
+    assert!(!singularities(&start).0.is_empty());
+    let (mesh, r) = build_secondary(&target, &opts(300.0), &mut |_, _| {}).unwrap();
+    assert!(unfolded_and_over_the_target(&mesh, &target), "{r:?}");
+    let why = &r.layout;
+    assert!(
+        why.starts_with("the footprint triangulated in plan"),
+        "{why}"
+    );
+    assert!(
+        why.contains("after one face per corner (3 corners"),
+        "{why}"
+    );
     assert!(why.contains("then the four-corner grid"), "{why}");
     assert!(
         why.contains("edges shorter than 0.2 of the mean edge"),
         "{why}"
     );
     assert!(why.contains("--layout COARSE.obj"), "{why}");
-    // the shortest edge of each layout lies by the inner bend, on the plan's axis
+    // the shortest edge of each layout tried lies by the inner bend, on the plan's axis
     let places: Vec<f64> = why
         .split("), the shortest ")
         .skip(1)
@@ -392,4 +439,39 @@ fn a_layout_that_starts_with_collapsed_edges_is_named_with_its_place() {
         .collect();
     assert_eq!(places.len(), 2, "{why}");
     assert!(places.iter().all(|x| x.abs() < 100.0), "{why}");
+}
+
+/// A roof round two courtyards (fixtures/targets/two_courtyards.obj: three boundary
+/// loops), which no ring or grid follows (it was refused: "the automatic layout handles
+/// one or two"): the triangulated footprint covers it, with three boundary loops, no face
+/// over a court, every face up and the goals measured (exit 3 downstream).
+#[test]
+fn a_roof_round_two_courtyards_gets_the_triangulated_footprint() {
+    let target = load("two_courtyards.obj");
+    assert_eq!(target.validate().unwrap().len(), 3);
+    for unit in [300.0, 150.0] {
+        let start = initial_grid(&target, &opts(unit)).unwrap();
+        assert_eq!(counts(&start).loops, 3);
+        assert!(unfolded_and_over_the_target(&start, &target), "{unit}");
+        let (mesh, r) = build_secondary(&target, &opts(unit), &mut |_, _| {}).unwrap();
+        assert_eq!(counts(&mesh).loops, 3);
+        assert!(
+            unfolded_and_over_the_target(&mesh, &target),
+            "{unit}: {r:?}"
+        );
+        assert!(
+            r.layout.starts_with("the footprint triangulated in plan"),
+            "{r:?}"
+        );
+        assert!(
+            r.layout.contains(
+                "after the rings and grids (for one or two boundary loops; the target has 3)"
+            ),
+            "{r:?}"
+        );
+        assert!(r.coverage > 0.9, "{unit}: {r:?}");
+        // every face side within twice the unit either way (the kites of the leftover
+        // triangles are the shortest)
+        assert!(r.side_min > 0.25 && r.side_max < 2.0, "{unit}: {r:?}");
+    }
 }
