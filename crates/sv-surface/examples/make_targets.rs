@@ -38,6 +38,11 @@
 //! | `torus_patch.obj` | torus R = 3 m, r = 1.5 m, both curvature signs | two meridians and two parallels |
 //! | `horseshoe.obj` | paraboloid z = 900 - r^2 / 15000 | a 1.5 m wide band bent round a half circle (R 2.25 m), half-round ends: no corner, its centre outside the plan |
 //! | `two_courtyards.obj` | paraboloid z = 900 - x^2 / 16000 - y^2 / 12000 | rectangle 8 x 5 m round two rectangular courts (1.6 x 2.0 and 2.0 x 2.2 m): three boundary loops, 200 mm cells |
+//! | `u_plan.obj` | paraboloid z = 900 - r^2 / 12000 | U: 6 x 4.5 m less a 2.4 x 2.5 m court open to the north (two reflex corners) |
+//! | `round_courtyards.obj` | paraboloid z = 900 - x^2 / 16000 - y^2 / 12000 | ellipse 4 x 2.6 m semi-axes round two round courts (R 700 mm): three loops, no corner |
+//!
+//! The last two are triangulated in plan (spade's constrained Delaunay triangulation,
+//! refined to 150 mm triangles).
 //!
 //! The frame's acceptance (docs/geometry.md, "Closing the joints") adds `hypar_square.obj`,
 //! z = (x^2 - y^2) / 12000 over a 3.6 x 3.6 m square along its principal directions.
@@ -367,6 +372,64 @@ fn two_courtyards_obj() -> String {
     out
 }
 
+/// Closed polygons (the outer one first, then the courts) triangulated in plan, refined
+/// to triangles of about 150 mm with no angle under 25 degrees, the courts left out, and
+/// lifted by `height`.
+fn plan_obj(name: &str, loops: &[Vec<(f64, f64)>], height: fn(f64, f64) -> f64) -> String {
+    use spade::{
+        AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+    };
+    let side: f64 = 150.0;
+    let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
+    for lp in loops {
+        let m = lp.len();
+        let mut points = Vec::new();
+        for k in 0..m {
+            let (a, b) = (lp[k], lp[(k + 1) % m]);
+            let n = ((b.0 - a.0).hypot(b.1 - a.1) / side).ceil().max(1.0) as usize;
+            points.extend((0..n).map(|i| {
+                let t = i as f64 / n as f64;
+                (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t)
+            }));
+        }
+        let handles: Vec<_> = points
+            .iter()
+            .map(|p| cdt.insert(Point2::new(p.0, p.1)).expect("finite point"))
+            .collect();
+        for k in 0..handles.len() {
+            cdt.add_constraint(handles[k], handles[(k + 1) % handles.len()]);
+        }
+    }
+    let refined = cdt.refine(
+        RefinementParameters::<f64>::new()
+            .exclude_outer_faces(true)
+            .keep_constraint_edges()
+            .with_max_allowed_area(3f64.sqrt() / 4.0 * side * side)
+            .with_angle_limit(AngleLimit::from_deg(25.0)),
+    );
+    let outside: std::collections::HashSet<_> = refined.excluded_faces.into_iter().collect();
+    let mut out = format!("# spinvalence acceptance target {name}, mm, Z up\n");
+    for v in cdt.vertices() {
+        let p = v.position();
+        let _ = writeln!(out, "v {:.1} {:.1} {:.1}", p.x, p.y, height(p.x, p.y));
+    }
+    for f in cdt.inner_faces() {
+        if !outside.contains(&f.fix()) {
+            let [a, b, c] = f.vertices().map(|v| v.fix().index() + 1);
+            let _ = writeln!(out, "f {a} {b} {c}");
+        }
+    }
+    out
+}
+
+fn courtyard_height(x: f64, y: f64) -> f64 {
+    900.0 - x * x / 16000.0 - y * y / 12000.0
+}
+
+fn dome_900(x: f64, y: f64) -> f64 {
+    900.0 - (x * x + y * y) / 12000.0
+}
+
 /// Points of an ellipse with semi-axes `a`, `b` about `centre`, counter-clockwise.
 fn ellipse(a: f64, b: f64, centre: (f64, f64), n: usize) -> Vec<(f64, f64)> {
     (0..n)
@@ -453,6 +516,35 @@ fn footprints() -> Vec<(&'static str, String)> {
         ),
         ("horseshoe", horseshoe_obj()),
         ("two_courtyards", two_courtyards_obj()),
+        (
+            "u_plan",
+            plan_obj(
+                "u_plan",
+                &[vec![
+                    (-3000.0, -2250.0),
+                    (3000.0, -2250.0),
+                    (3000.0, 2250.0),
+                    (1200.0, 2250.0),
+                    (1200.0, -250.0),
+                    (-1200.0, -250.0),
+                    (-1200.0, 2250.0),
+                    (-3000.0, 2250.0),
+                ]],
+                dome_900,
+            ),
+        ),
+        (
+            "round_courtyards",
+            plan_obj(
+                "round_courtyards",
+                &[
+                    ellipse(4000.0, 2600.0, (0.0, 0.0), 160),
+                    ellipse(700.0, 700.0, (-1800.0, 0.0), 32),
+                    ellipse(700.0, 700.0, (1800.0, 200.0), 32),
+                ],
+                courtyard_height,
+            ),
+        ),
     ]
 }
 

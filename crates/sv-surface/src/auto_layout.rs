@@ -16,9 +16,10 @@
 //! | 5 convex corners and one reflex (L) | three faces meeting at the reflex corner | none (the reflex corner has three faces) |
 //! | two boundary loops, one inside the other in plan (annulus) | a ring of eight faces | none |
 //! | two boundary loops side by side or one over the other (a tube) | a ring of eight faces along it | none |
+//! | sides along two directions at right angles, with reflex corners (not an L) or courts | rectangular cells cut by the lines through the corners (`cell_layout.rs`), tried before the rows above | none |
 //!
 //! Everything else (four corners, one or two corners, several reflex corners) goes to
-//! the four-corner grid; three or more boundary loops to none of these. A layout whose
+//! the four-corner grid; three or more boundary loops that are not cells to none of these. A layout whose
 //! subdivision starts with a face flipped against the target does not fit the footprint (an
 //! O-grid round a horseshoe's centre, which lies outside its plan; the courtyard's ring
 //! round an L-shaped court): [`fallback`] names the one `param.rs` tries next, and
@@ -106,6 +107,9 @@ pub(crate) enum Drawn {
     RingByLength,
     /// A ring of faces along a tube.
     Tube,
+    /// A footprint whose sides run along two directions at right angles cut into that
+    /// many rectangular cells by the lines through its corners (`cell_layout.rs`).
+    Cells(usize),
 }
 
 impl Drawn {
@@ -125,6 +129,9 @@ impl Drawn {
                 "the ring of {RING_FACES} faces joining the two loops at equal shares of their lengths"
             ),
             Drawn::Tube => format!("the ring of {RING_FACES} faces along the tube"),
+            Drawn::Cells(n) => format!(
+                "{n} cells cut by the lines through the corners (the sides run along two directions at right angles)"
+            ),
         }
     }
 }
@@ -135,6 +142,7 @@ impl Drawn {
 /// courtyard not star-shaped about its centre: an L).
 pub(crate) fn fallback(index: &TargetIndex<'_>, drawn: Drawn) -> Option<(Drawn, Option<QuadMesh>)> {
     match drawn {
+        Drawn::Cells(_) => layout_without_cells(index),
         Drawn::OGrid | Drawn::PerCorner(_) | Drawn::ReflexCorner => {
             let (convex, reflex) = corner_counts(index);
             Some((Drawn::FourCorner { convex, reflex }, None))
@@ -155,7 +163,19 @@ fn corner_counts(index: &TargetIndex<'_>) -> (usize, usize) {
 /// is `None` for the four-corner grid (see the module documentation); `None` for three or
 /// more boundary loops (a roof with two courtyards), which only the triangulated layout
 /// (`triangle_layout.rs`) and a designer's follow.
-pub(crate) fn coarse_layout(index: &TargetIndex<'_>) -> Option<(Drawn, Option<QuadMesh>)> {
+pub(crate) fn coarse_layout(index: &TargetIndex<'_>, h: Real) -> Option<(Drawn, Option<QuadMesh>)> {
+    let (convex, reflex) = corner_counts(index);
+    let cells_first = index.loops.len() > 1 || (reflex > 0 && (convex, reflex) != (5, 1));
+    if cells_first {
+        if let Some(cells) = crate::cell_layout::cell_layout(index, h) {
+            return Some((Drawn::Cells(cells.faces.len()), Some(cells)));
+        }
+    }
+    layout_without_cells(index)
+}
+
+/// [`coarse_layout`] but for the cells.
+fn layout_without_cells(index: &TargetIndex<'_>) -> Option<(Drawn, Option<QuadMesh>)> {
     let v = &index.mesh.vertices;
     match index.loops.len() {
         1 => {}

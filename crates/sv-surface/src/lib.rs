@@ -26,6 +26,7 @@
 mod anchors;
 mod auto_layout;
 mod builtin;
+mod cell_layout;
 mod cross_field;
 mod error;
 mod layout;

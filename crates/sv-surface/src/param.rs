@@ -115,10 +115,10 @@ pub(crate) fn initial_mesh_indexed(
     opts: &SecondaryOptions,
 ) -> Result<(QuadMesh, String), SurfaceError> {
     let mut tried: Vec<String> = Vec::new();
-    let mut next = crate::auto_layout::coarse_layout(index);
+    let mut next = crate::auto_layout::coarse_layout(index, opts.unit_size);
     if next.is_none() {
         tried.push(format!(
-            "the rings and grids (for one or two boundary loops; the target has {})",
+            "the cells (the sides do not run along two directions at right angles), the rings and grids (for one or two boundary loops; the target has {})",
             index.loops.len()
         ));
     }

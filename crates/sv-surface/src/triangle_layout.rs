@@ -33,11 +33,16 @@ use crate::target::{loop_arc, loop_at, TargetIndex};
 /// while the triangles stay small enough for a court or an arm a few units wide).
 pub(crate) const TRIANGLE_SIDE: Real = 5.0;
 
+/// Fewest points of a loop without corners (a round court): three would make it a
+/// triangle, whose faces fold where the court's round side bulges past its chords.
+const ROUND_LOOP: usize = 8;
+
 /// Smallest angle the refinement asks of a coarse triangle (degrees).
 const SMALLEST_ANGLE: Real = 25.0;
 
-/// The target's own triangles in plan, for lifting a point of the plan onto the target.
-struct Plan {
+/// The target's own triangles in plan (the target frame's plane), for lifting a point of
+/// the plan onto the target.
+pub(crate) struct Plan {
     centre: Point3,
     d1: Vector3,
     d2: Vector3,
@@ -46,7 +51,7 @@ struct Plan {
 }
 
 impl Plan {
-    fn new(index: &TargetIndex<'_>) -> Self {
+    pub(crate) fn new(index: &TargetIndex<'_>) -> Self {
         let frame = crate::param::target_frame(index.mesh);
         let v = &index.mesh.vertices;
         let mut plan = Plan {
@@ -64,13 +69,13 @@ impl Plan {
         plan
     }
 
-    fn at(&self, p: &Point3) -> [Real; 2] {
+    pub(crate) fn at(&self, p: &Point3) -> [Real; 2] {
         let d = p - self.centre;
         [d.dot(&self.d1), d.dot(&self.d2)]
     }
 
     /// The target's point over `q`, where exactly one sheet of it lies over `q`.
-    fn lift(&self, q: [Real; 2]) -> Option<Point3> {
+    pub(crate) fn lift(&self, q: [Real; 2]) -> Option<Point3> {
         let mut found: Option<Point3> = None;
         for (t, p) in self.triangles.iter().zip(&self.corners) {
             let area = cross(t[0], t[1], t[2]);
@@ -102,7 +107,8 @@ fn cross(a: [Real; 2], b: [Real; 2], c: [Real; 2]) -> Real {
 }
 
 /// Points of one boundary loop for the triangulation: its corners and, between
-/// consecutive corners, points evenly by arc length about `side` apart; at least three.
+/// consecutive corners, points evenly by arc length about `side` apart; [`ROUND_LOOP`] at
+/// least on a loop without corners.
 fn loop_samples(index: &TargetIndex<'_>, lp: &[usize], side: Real) -> Vec<Point3> {
     let v = &index.mesh.vertices;
     let arc = loop_arc(v, lp);
@@ -119,7 +125,11 @@ fn loop_samples(index: &TargetIndex<'_>, lp: &[usize], side: Real) -> Vec<Point3
             end += length;
         }
         let pieces = (((end - start) / side).round() as usize).max(1);
-        let pieces = if at.len() == 1 { pieces.max(3) } else { pieces };
+        let pieces = if at.len() == 1 {
+            pieces.max(ROUND_LOOP)
+        } else {
+            pieces
+        };
         out.extend((0..pieces).map(|i| {
             loop_at(
                 v,
@@ -202,6 +212,16 @@ fn corner_turn(vertices: &[Point3], quad: &[usize; 4]) -> Option<Real> {
 /// target's plane (a loop crossing itself or another in plan, a point of the plan with
 /// two sheets of the target over it).
 pub(crate) fn triangle_layout(index: &TargetIndex<'_>, side: Real) -> Option<QuadMesh> {
+    // one size of triangle throughout, small enough for the shortest loop: the subdivision
+    // cuts every chord of faces into one count, and a chord running from small triangles
+    // by a round court to large ones far from it cut the small ones into slivers
+    let v = &index.mesh.vertices;
+    let shortest = index
+        .loops
+        .iter()
+        .map(|lp| loop_arc(v, lp)[lp.len()])
+        .fold(Real::INFINITY, Real::min);
+    let side = side.min(shortest / ROUND_LOOP as Real);
     let plan = Plan::new(index);
     let mut cdt = ConstrainedDelaunayTriangulation::<Point2<Real>>::new();
     let mut position: HashMap<FixedVertexHandle, Point3> = HashMap::new();

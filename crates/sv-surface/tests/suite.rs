@@ -441,13 +441,54 @@ fn a_layout_that_starts_with_collapsed_edges_gives_way_to_the_triangulated_footp
     assert!(places.iter().all(|x| x.abs() < 100.0), "{why}");
 }
 
-/// A roof round two courtyards (fixtures/targets/two_courtyards.obj: three boundary
-/// loops), which no ring or grid follows (it was refused: "the automatic layout handles
-/// one or two"): the triangulated footprint covers it, with three boundary loops, no face
-/// over a court, every face up and the goals measured (exit 3 downstream).
+/// Footprints whose sides run along two directions at right angles (a U plan; a roof round
+/// two rectangular courts, three boundary loops) are cut into cells by the lines through
+/// their corners: no interior irregular vertex, one face at every convex corner and three
+/// at every reflex one, and every goal of the hub mesh met at 300 and 150 mm. The U plan
+/// had the four-corner grid across its reflex corners (coverage 0.82, a boundary 216 mm
+/// off); the courts were refused (the automatic layout took one or two loops).
 #[test]
-fn a_roof_round_two_courtyards_gets_the_triangulated_footprint() {
-    let target = load("two_courtyards.obj");
+fn footprints_with_sides_at_right_angles_are_cut_into_cells() {
+    for (name, loops, convex, reflex) in [("u_plan.obj", 1, 6, 2), ("two_courtyards.obj", 3, 4, 8)]
+    {
+        let target = load(name);
+        assert_eq!(target.validate().unwrap().len(), loops, "{name}");
+        for unit in [300.0, 150.0] {
+            let start = initial_grid(&target, &opts(unit)).unwrap();
+            let c = counts(&start);
+            assert_eq!(c.loops, loops, "{name}");
+            assert_eq!(singularities(&start), (vec![], reflex), "{name} {unit}");
+            let corners = (0..start.vertices.len())
+                .filter(|&v| c.boundary[v] && c.faces[v] == 1)
+                .count();
+            assert_eq!(corners, convex, "{name} {unit}");
+            assert!(
+                unfolded_and_over_the_target(&start, &target),
+                "{name} {unit}"
+            );
+            let (mesh, r) = build_secondary(&target, &opts(unit), &mut |_, _| {}).unwrap();
+            assert!(
+                unfolded_and_over_the_target(&mesh, &target),
+                "{name} {unit}"
+            );
+            assert!(
+                r.layout
+                    .contains("cells cut by the lines through the corners"),
+                "{name} {unit}: {}",
+                r.layout
+            );
+            assert!(r.unmet.is_empty(), "{name} {unit}: {:?}", r.unmet);
+        }
+    }
+}
+
+/// A roof round two round courts (fixtures/targets/round_courtyards.obj: three boundary
+/// loops, no corner), which neither the cells nor a ring follows (it was refused: "the
+/// automatic layout handles one or two"): the triangulated footprint covers it, with three
+/// boundary loops, no face over a court, every face up and its goals measured.
+#[test]
+fn a_roof_round_two_round_courts_gets_the_triangulated_footprint() {
+    let target = load("round_courtyards.obj");
     assert_eq!(target.validate().unwrap().len(), 3);
     for unit in [300.0, 150.0] {
         let start = initial_grid(&target, &opts(unit)).unwrap();
@@ -461,17 +502,16 @@ fn a_roof_round_two_courtyards_gets_the_triangulated_footprint() {
         );
         assert!(
             r.layout.starts_with("the footprint triangulated in plan"),
-            "{r:?}"
+            "{}",
+            r.layout
         );
         assert!(
-            r.layout.contains(
-                "after the rings and grids (for one or two boundary loops; the target has 3)"
-            ),
-            "{r:?}"
+            r.layout
+                .contains("the rings and grids (for one or two boundary loops; the target has 3)"),
+            "{}",
+            r.layout
         );
         assert!(r.coverage > 0.9, "{unit}: {r:?}");
-        // every face side within twice the unit either way (the kites of the leftover
-        // triangles are the shortest)
-        assert!(r.side_min > 0.25 && r.side_max < 2.0, "{unit}: {r:?}");
+        assert!(!r.irregular_vertices.is_empty(), "{unit}");
     }
 }
