@@ -728,6 +728,8 @@ fn a_courtyard_with_sides_at_right_angles_is_cut_into_cells_through_to_the_sheet
         line.ends_with("cells cut by the lines through the corners (the sides run along two directions at right angles)"),
         "{line}"
     );
+    let html = std::fs::read_to_string(dir.join("o/report.html")).unwrap();
+    assert!(html.contains(&format!("<tr><th>layout</th><td>{line}</td></tr>")));
     let unmet: Vec<&str> = report["unmet"]
         .as_array()
         .unwrap()

@@ -333,6 +333,9 @@ fn quality_table(input: &ReportInput<'_>) -> String {
                 100.0 * m.coverage
             ),
         ));
+        if !m.layout.is_empty() {
+            rows.push(("layout".into(), m.layout.clone()));
+        }
         if !m.unmet.is_empty() {
             rows.push(("goals not met".into(), m.unmet.join("; ")));
         }
