@@ -24,6 +24,15 @@ const SIDE_TURN: Real = 12.0;
 /// line of cells.
 const SAME_LINE: Real = 0.5;
 
+/// Union-find root of `x`.
+fn find(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    x
+}
+
 /// One boundary loop's corners: where they are in the loop (arc length), on the target,
 /// and in plan.
 struct Sides {
@@ -91,41 +100,79 @@ pub(crate) fn cell_layout(index: &TargetIndex<'_>, h: Real) -> Option<QuadMesh> 
             return None;
         }
     }
-    // the lines through the corners along both directions, near ones merged
-    let lines = |k: usize| {
-        let mut xs: Vec<Real> = loops
-            .iter()
-            .flat_map(|l| l.corners.iter().map(move |c| along(c.2)[k]))
-            .collect();
-        xs.sort_by(Real::total_cmp);
-        let mut groups: Vec<Vec<Real>> = Vec::new();
-        for x in xs {
-            match groups.last_mut() {
-                Some(g) if x - g[g.len() - 1] < SAME_LINE * h => g.push(x),
-                _ => groups.push(vec![x]),
+    // every corner in plan along the two directions, the loops one after the other
+    let at: Vec<[Real; 2]> = loops
+        .iter()
+        .flat_map(|l| l.corners.iter().map(|c| along(c.2)))
+        .collect();
+    let starts: Vec<usize> = loops
+        .iter()
+        .scan(0, |n, l| {
+            *n += l.corners.len();
+            Some(*n - l.corners.len())
+        })
+        .collect();
+    // the lines: the two ends of a side share the line it runs along (the plan of a
+    // tilted roof turns its sides by a few degrees), then lines nearer than half a unit
+    // are one
+    let lines = |k: usize| -> (Vec<Real>, Vec<usize>) {
+        let mut parent: Vec<usize> = (0..at.len()).collect();
+        for (l, &start) in loops.iter().zip(&starts) {
+            let n = l.corners.len();
+            for i in 0..n {
+                let (a, b) = (start + i, start + (i + 1) % n);
+                let d = [at[b][0] - at[a][0], at[b][1] - at[a][1]];
+                // a side along direction 1 - k keeps coordinate k
+                if d[k].abs() < d[1 - k].abs() {
+                    let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                    parent[ra] = rb;
+                }
             }
         }
-        groups
-            .iter()
-            .map(|g| g.iter().sum::<Real>() / g.len() as Real)
-            .collect::<Vec<Real>>()
+        let mut members: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+        for c in 0..at.len() {
+            members.entry(find(&mut parent, c)).or_default().push(c);
+        }
+        let mut groups: Vec<(Real, Vec<usize>)> = members
+            .into_values()
+            .map(|g| {
+                (
+                    g.iter().map(|&c| at[c][k]).sum::<Real>() / g.len() as Real,
+                    g,
+                )
+            })
+            .collect();
+        groups.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // (sum of coordinates, corners) per line
+        let mut lines: Vec<(Real, usize)> = Vec::new();
+        let mut line_of = vec![0usize; at.len()];
+        for (x, group) in groups {
+            let merge = lines
+                .last()
+                .is_some_and(|&(sum, n)| x - sum / (n as Real) < SAME_LINE * h);
+            if !merge {
+                lines.push((0.0, 0));
+            }
+            let last = lines.len() - 1;
+            lines[last].0 += x * group.len() as Real;
+            lines[last].1 += group.len();
+            for c in group {
+                line_of[c] = last;
+            }
+        }
+        (
+            lines.iter().map(|&(sum, n)| sum / n as Real).collect(),
+            line_of,
+        )
     };
-    let (xs, ys) = (lines(0), lines(1));
-    let line_of = |lines: &[Real], x: Real| {
-        (0..lines.len())
-            .min_by(|&a, &b| (lines[a] - x).abs().total_cmp(&(lines[b] - x).abs()))
-            .unwrap_or(0)
-    };
+    let ((xs, x_of), (ys, y_of)) = (lines(0), lines(1));
     // every loop as a polygon of grid points (its corners on their lines)
     let snapped: Vec<Vec<(usize, usize)>> = loops
         .iter()
-        .map(|l| {
-            l.corners
-                .iter()
-                .map(|c| {
-                    let q = along(c.2);
-                    (line_of(&xs, q[0]), line_of(&ys, q[1]))
-                })
+        .zip(&starts)
+        .map(|(l, &start)| {
+            (start..start + l.corners.len())
+                .map(|c| (x_of[c], y_of[c]))
                 .collect()
         })
         .collect();
