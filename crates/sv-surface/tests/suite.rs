@@ -441,16 +441,19 @@ fn a_layout_that_starts_with_collapsed_edges_gives_way_to_the_triangulated_footp
     assert!(places.iter().all(|x| x.abs() < 100.0), "{why}");
 }
 
-/// Footprints whose sides run along two directions at right angles (a U plan; a roof round
-/// two rectangular courts, three boundary loops) are cut into cells by the lines through
-/// their corners: no interior irregular vertex, one face at every convex corner and three
+/// Footprints whose sides run along two directions at right angles (a U plan; a T plan,
+/// whose sides the tilt of its plan turns by 100 mm over 2 m; a roof round two rectangular
+/// courts, three boundary loops) are cut into cells by the lines through their corners: no interior irregular vertex, one face at every convex corner and three
 /// at every reflex one, and every goal of the hub mesh met at 300 and 150 mm. The U plan
 /// had the four-corner grid across its reflex corners (coverage 0.82, a boundary 216 mm
 /// off); the courts were refused (the automatic layout took one or two loops).
 #[test]
 fn footprints_with_sides_at_right_angles_are_cut_into_cells() {
-    for (name, loops, convex, reflex) in [("u_plan.obj", 1, 6, 2), ("two_courtyards.obj", 3, 4, 8)]
-    {
+    for (name, loops, convex, reflex) in [
+        ("u_plan.obj", 1, 6, 2),
+        ("t_plan.obj", 1, 6, 2),
+        ("two_courtyards.obj", 3, 4, 8),
+    ] {
         let target = load(name);
         assert_eq!(target.validate().unwrap().len(), loops, "{name}");
         for unit in [300.0, 150.0] {
