@@ -40,9 +40,10 @@
 //! | `two_courtyards.obj` | paraboloid z = 900 - x^2 / 16000 - y^2 / 12000 | rectangle 8 x 5 m round two rectangular courts (1.6 x 2.0 and 2.0 x 2.2 m): three boundary loops, 200 mm cells |
 //! | `u_plan.obj` | paraboloid z = 900 - r^2 / 12000 | U: 6 x 4.5 m less a 2.4 x 2.5 m court open to the north (two reflex corners) |
 //! | `t_plan.obj` | paraboloid z = 900 - r^2 / 12000 | T: a 6 x 1.8 m bar on a 2 x 3.2 m stem (two reflex corners; its plan's frame tilts with the dome off its centre) |
+//! | `notch_plan.obj` | paraboloid z = 900 - r^2 / 12000 | rectangle 6 x 4 m with a notch 0.8 m wide, 1 m deep in one long side (its corners closer than the other layouts' corner window) |
 //! | `round_courtyards.obj` | paraboloid z = 900 - x^2 / 16000 - y^2 / 12000 | ellipse 4 x 2.6 m semi-axes round two round courts (R 700 mm): three loops, no corner |
 //!
-//! The last three are triangulated in plan (spade's constrained Delaunay triangulation,
+//! The last four are triangulated in plan (spade's constrained Delaunay triangulation,
 //! refined to 150 mm triangles).
 //!
 //! The frame's acceptance (docs/geometry.md, "Closing the joints") adds `hypar_square.obj`,
@@ -547,6 +548,23 @@ fn footprints() -> Vec<(&'static str, String)> {
                     (3000.0, 1000.0),
                     (3000.0, 2800.0),
                     (-3000.0, 2800.0),
+                ]],
+                dome_900,
+            ),
+        ),
+        (
+            "notch_plan",
+            plan_obj(
+                "notch_plan",
+                &[vec![
+                    (-3000.0, -2000.0),
+                    (3000.0, -2000.0),
+                    (3000.0, 2000.0),
+                    (400.0, 2000.0),
+                    (400.0, 1000.0),
+                    (-400.0, 1000.0),
+                    (-400.0, 2000.0),
+                    (-3000.0, 2000.0),
                 ]],
                 dome_900,
             ),

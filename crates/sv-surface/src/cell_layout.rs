@@ -44,9 +44,22 @@ struct Sides {
 /// The cells' coarse layout of `index`'s target at unit `h`, or `None` where a loop has
 /// fewer than four corners or a side that does not run along one of two directions at
 /// right angles, where the lines cut it into one cell only, or where a point inside is not
-/// over exactly one sheet of the target.
+/// over exactly one sheet of the target. The corners are looked for over a unit's length
+/// first (a notch a few units wide keeps all four), then over the fortieth of the loop the
+/// other layouts use (a court's corners rounded with a radius of two units are corners).
 pub(crate) fn cell_layout(index: &TargetIndex<'_>, h: Real) -> Option<QuadMesh> {
     let plan = Plan::new(index);
+    cells_with_corners(index, &plan, h, true).or_else(|| cells_with_corners(index, &plan, h, false))
+}
+
+/// [`cell_layout`] with the corners found over a unit's length (`fine`) or a fortieth of
+/// the loop.
+fn cells_with_corners(
+    index: &TargetIndex<'_>,
+    plan: &Plan,
+    h: Real,
+    fine: bool,
+) -> Option<QuadMesh> {
     let v = &index.mesh.vertices;
     let loops: Vec<Sides> = index
         .loops
@@ -54,7 +67,12 @@ pub(crate) fn cell_layout(index: &TargetIndex<'_>, h: Real) -> Option<QuadMesh> 
         .map(|lp| {
             let arc = loop_arc(v, lp);
             let length = arc[lp.len()];
-            let corners = crate::auto_layout::corners(index, lp, length / 40.0)
+            let window = if fine {
+                (length / 40.0).min(h)
+            } else {
+                length / 40.0
+            };
+            let corners = crate::auto_layout::corners(index, lp, window)
                 .iter()
                 .map(|c| {
                     let p = v[lp[c.at]];
@@ -70,6 +88,34 @@ pub(crate) fn cell_layout(index: &TargetIndex<'_>, h: Real) -> Option<QuadMesh> 
         .collect();
     if loops.iter().any(|l| l.corners.len() < 4) {
         return None;
+    }
+    // every side follows its loop within a unit or a quarter of its length (a rounded
+    // corner's middle, where it was found, lies 0.29 of the radius off the straight sides;
+    // a side across a court's opening whose rounded corners were not found lies the court's
+    // depth off)
+    for (l, lp) in loops.iter().zip(&index.loops) {
+        let k = l.corners.len();
+        for i in 0..k {
+            let (s0, mut s1) = (l.corners[i].0, l.corners[(i + 1) % k].0);
+            if s1 <= s0 {
+                s1 += l.length;
+            }
+            let (a, b) = (l.corners[i].2, l.corners[(i + 1) % k].2);
+            let tolerance = h.max(0.25 * (b[0] - a[0]).hypot(b[1] - a[1]));
+            let steps = ((s1 - s0) / (0.25 * h)).ceil().max(1.0) as usize;
+            let off = (1..steps).any(|j| {
+                let q = plan.at(&loop_at(
+                    v,
+                    lp,
+                    &l.arc,
+                    s0 + (s1 - s0) * j as Real / steps as Real,
+                ));
+                sv_geom::planar::point_segment_distance(q, a, b) > tolerance
+            });
+            if off {
+                return None;
+            }
+        }
     }
     // the two directions: the sides' mean direction modulo a right angle
     let sides: Vec<[Real; 2]> = loops

@@ -442,8 +442,9 @@ fn a_layout_that_starts_with_collapsed_edges_gives_way_to_the_triangulated_footp
 }
 
 /// Footprints whose sides run along two directions at right angles (a U plan; a T plan,
-/// whose sides the tilt of its plan turns by 100 mm over 2 m; a roof round two rectangular
-/// courts, three boundary loops) are cut into cells by the lines through their corners: no interior irregular vertex, one face at every convex corner and three
+/// whose sides the tilt of its plan turns by 100 mm over 2 m; a notch whose corners lie
+/// closer than the other layouts look for corners; a roof round two rectangular courts,
+/// three boundary loops) are cut into cells by the lines through their corners: no interior irregular vertex, one face at every convex corner and three
 /// at every reflex one, and every goal of the hub mesh met at 300 and 150 mm. The U plan
 /// had the four-corner grid across its reflex corners (coverage 0.82, a boundary 216 mm
 /// off); the courts were refused (the automatic layout took one or two loops).
@@ -452,6 +453,7 @@ fn footprints_with_sides_at_right_angles_are_cut_into_cells() {
     for (name, loops, convex, reflex) in [
         ("u_plan.obj", 1, 6, 2),
         ("t_plan.obj", 1, 6, 2),
+        ("notch_plan.obj", 1, 6, 2),
         ("two_courtyards.obj", 3, 4, 8),
     ] {
         let target = load(name);
