@@ -13,6 +13,7 @@
 use sv_frame::QuadMesh;
 use sv_geom::{Point3, Real};
 
+use crate::layout::find;
 use crate::target::{loop_arc, loop_at, TargetIndex};
 use crate::triangle_layout::Plan;
 
@@ -23,15 +24,6 @@ const SIDE_TURN: Real = 12.0;
 /// Corner coordinates closer than this fraction of the unit along a direction share one
 /// line of cells.
 const SAME_LINE: Real = 0.5;
-
-/// Union-find root of `x`.
-fn find(parent: &mut [usize], mut x: usize) -> usize {
-    while parent[x] != x {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    x
-}
 
 /// One boundary loop's corners: where they are in the loop (arc length), on the target,
 /// and in plan.

@@ -19,8 +19,8 @@ use sv_geom::{Point3, Real, Vector3};
 use crate::target::{loop_arc, loop_at, TargetIndex};
 use crate::{SecondaryOptions, SurfaceError};
 
-/// Union-find over the coarse edges.
-fn find(parent: &mut [usize], mut x: usize) -> usize {
+/// Union-find root of `x` (over the coarse edges here, over corners in `cell_layout.rs`).
+pub(crate) fn find(parent: &mut [usize], mut x: usize) -> usize {
     while parent[x] != x {
         parent[x] = parent[parent[x]];
         x = parent[x];
