@@ -27,10 +27,11 @@ use sv_geom::{Point3, Real, Vector3};
 
 use crate::target::{loop_arc, loop_at, TargetIndex};
 
-/// Side of the coarse triangles, in units: a triangle of side `s` splits into kites whose
-/// sides (`s / 2` and `s / (2 sqrt 3)`) have a mean of about `0.39 s`, so that this side
-/// subdivides every kite into about 2 x 2 faces (fewer irregular vertices than 1 x 1,
-/// while the triangles stay small enough for a court or an arm a few units wide).
+/// Side of the coarse triangles, in units: a paired quad of side `s` splits into four of
+/// side `s / 2` and a triangle left into kites whose sides (`s / 2` and `s / (2 sqrt 3)`)
+/// have a mean of about `0.39 s`, so that this side subdivides every coarse face into about
+/// 2 x 2 faces (fewer irregular vertices than 1 x 1, while the triangles stay small enough
+/// for a court or an arm a few units wide).
 pub(crate) const TRIANGLE_SIDE: Real = 5.0;
 
 /// Fewest points of a loop without corners (a round court): three would make it a
@@ -208,7 +209,8 @@ fn corner_turn(vertices: &[Point3], quad: &[usize; 4]) -> Option<Real> {
 }
 
 /// The triangulated layout of `index`'s target with coarse triangles of about `side` (mm),
-/// each split into three quads; `None` where the footprint is not a single sheet over the
+/// paired into quads where they make nearly rectangular ones, every quad split into four
+/// and every triangle left into three; `None` where the footprint is not a single sheet over the
 /// target's plane (a loop crossing itself or another in plan, a point of the plan with
 /// two sheets of the target over it).
 pub(crate) fn triangle_layout(index: &TargetIndex<'_>, side: Real) -> Option<QuadMesh> {
