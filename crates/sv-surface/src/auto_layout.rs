@@ -110,6 +110,19 @@ pub(crate) enum Drawn {
     /// A footprint whose sides run along two directions at right angles cut into that
     /// many rectangular cells by the lines through its corners (`cell_layout.rs`).
     Cells(usize),
+    /// None of the above: the target has this many boundary loops (three or more) and its
+    /// sides do not run at right angles.
+    NoLoopLayout(usize),
+    /// The last: the footprint triangulated in plan (`triangle_layout.rs`).
+    Triangulated,
+}
+
+/// How a layout starts: the four-corner grid of `param.rs`, a coarse quad mesh that
+/// [`crate::layout`] subdivides, or why it cannot be drawn on this footprint.
+pub(crate) enum Start {
+    Grid,
+    Coarse(QuadMesh),
+    Unfit(String),
 }
 
 impl Drawn {
@@ -132,23 +145,36 @@ impl Drawn {
             Drawn::Cells(n) => format!(
                 "{n} cells cut by the lines through the corners (the sides run along two directions at right angles)"
             ),
+            Drawn::NoLoopLayout(_) => "the cells (the sides do not run along two directions at right angles), the rings and grids".into(),
+            Drawn::Triangulated => "the footprint triangulated in plan, its triangles paired into quads and split (irregular vertices wherever the triangulation puts them)".into(),
         }
     }
 }
 
-/// The layout to try where `drawn` folds on `index`'s target, if any: the four-corner grid
-/// after a one-loop coarse layout (it opens its smooth corners into valence-3 vertices as
-/// the O-grid has them), the ring joined by arc length after the courtyard's ring (a
-/// courtyard not star-shaped about its centre: an L).
-pub(crate) fn fallback(index: &TargetIndex<'_>, drawn: Drawn) -> Option<(Drawn, Option<QuadMesh>)> {
+/// The layout to try where `drawn` does not fit `index`'s target (at unit `h`), if any:
+/// the four-corner grid after a one-loop coarse layout (it opens its smooth corners into
+/// valence-3 vertices as the O-grid has them), the ring joined by arc length after the
+/// courtyard's ring (a courtyard not star-shaped about its centre: an L), the layouts
+/// without cells after the cells, and after the last of those the triangulated footprint.
+pub(crate) fn fallback(index: &TargetIndex<'_>, drawn: Drawn, h: Real) -> Option<(Drawn, Start)> {
     match drawn {
-        Drawn::Cells(_) => layout_without_cells(index),
+        Drawn::Cells(_) => Some(layout_without_cells(index)),
         Drawn::OGrid | Drawn::PerCorner(_) | Drawn::ReflexCorner => {
             let (convex, reflex) = corner_counts(index);
-            Some((Drawn::FourCorner { convex, reflex }, None))
+            Some((Drawn::FourCorner { convex, reflex }, Start::Grid))
         }
-        Drawn::Courtyard => Some((Drawn::RingByLength, Some(tube(index)))),
-        Drawn::FourCorner { .. } | Drawn::RingByLength | Drawn::Tube => None,
+        Drawn::Courtyard => Some((Drawn::RingByLength, Start::Coarse(tube(index)))),
+        Drawn::FourCorner { .. } | Drawn::RingByLength | Drawn::Tube | Drawn::NoLoopLayout(_) => {
+            let side = crate::triangle_layout::TRIANGLE_SIDE * h;
+            let start = match crate::triangle_layout::triangle_layout(index, side) {
+                Some(coarse) => Start::Coarse(coarse),
+                None => {
+                    Start::Unfit("the footprint is not one sheet over the target's plane".into())
+                }
+            };
+            Some((Drawn::Triangulated, start))
+        }
+        Drawn::Triangulated => None,
     }
 }
 
@@ -159,23 +185,22 @@ fn corner_counts(index: &TargetIndex<'_>) -> (usize, usize) {
     (convex, found.len() - convex)
 }
 
-/// The automatic layout of `index`'s target: which one, and its coarse quad mesh, which
-/// is `None` for the four-corner grid (see the module documentation); `None` for three or
-/// more boundary loops (a roof with two courtyards), which only the triangulated layout
-/// (`triangle_layout.rs`) and a designer's follow.
-pub(crate) fn coarse_layout(index: &TargetIndex<'_>, h: Real) -> Option<(Drawn, Option<QuadMesh>)> {
+/// The automatic layout of `index`'s target at unit `h` (see the module documentation):
+/// three or more boundary loops that are not cells (a roof with two round courtyards) have
+/// none of their own, and [`fallback`] goes on to the triangulated footprint.
+pub(crate) fn coarse_layout(index: &TargetIndex<'_>, h: Real) -> (Drawn, Start) {
     let (convex, reflex) = corner_counts(index);
     let cells_first = index.loops.len() > 1 || (reflex > 0 && (convex, reflex) != (5, 1));
     if cells_first {
         if let Some(cells) = crate::cell_layout::cell_layout(index, h) {
-            return Some((Drawn::Cells(cells.faces.len()), Some(cells)));
+            return (Drawn::Cells(cells.faces.len()), Start::Coarse(cells));
         }
     }
     layout_without_cells(index)
 }
 
 /// [`coarse_layout`] but for the cells.
-fn layout_without_cells(index: &TargetIndex<'_>) -> Option<(Drawn, Option<QuadMesh>)> {
+fn layout_without_cells(index: &TargetIndex<'_>) -> (Drawn, Start) {
     let v = &index.mesh.vertices;
     match index.loops.len() {
         1 => {}
@@ -185,9 +210,14 @@ fn layout_without_cells(index: &TargetIndex<'_>) -> Option<(Drawn, Option<QuadMe
             } else {
                 (Drawn::Tube, tube(index))
             };
-            return Some((ring.0, Some(ring.1)));
+            return (ring.0, Start::Coarse(ring.1));
         }
-        _ => return None,
+        n => {
+            return (
+                Drawn::NoLoopLayout(n),
+                Start::Unfit(format!("for one or two boundary loops; the target has {n}")),
+            )
+        }
     }
     let lp = &index.boundary;
     let window = index.perimeter() / 40.0;
@@ -247,9 +277,9 @@ fn layout_without_cells(index: &TargetIndex<'_>) -> Option<(Drawn, Option<QuadMe
             let faces = vec![[3, 6, 0, 7], [6, 4, 5, 0], [7, 0, 1, 2]];
             (Drawn::ReflexCorner, QuadMesh { vertices, faces })
         }
-        _ => return Some((Drawn::FourCorner { convex, reflex }, None)),
+        _ => return (Drawn::FourCorner { convex, reflex }, Start::Grid),
     };
-    Some((layout.0, Some(layout.1)))
+    (layout.0, Start::Coarse(layout.1))
 }
 
 /// Boundary points where the loop is extreme along the target frame's diagonals, in loop

@@ -114,17 +114,12 @@ pub(crate) fn initial_mesh_indexed(
     index: &TargetIndex<'_>,
     opts: &SecondaryOptions,
 ) -> Result<(QuadMesh, String), SurfaceError> {
+    use crate::auto_layout::{coarse_layout, fallback, Start};
     let mut tried: Vec<String> = Vec::new();
-    let mut next = crate::auto_layout::coarse_layout(index, opts.unit_size);
-    if next.is_none() {
-        tried.push(format!(
-            "the cells (the sides do not run along two directions at right angles), the rings and grids (for one or two boundary loops; the target has {})",
-            index.loops.len()
-        ));
-    }
-    while let Some((drawn, coarse)) = next {
-        let mesh = match coarse {
-            Some(coarse) => {
+    let mut next = Some(coarse_layout(index, opts.unit_size));
+    while let Some((drawn, start)) = next {
+        let mesh = match start {
+            Start::Coarse(coarse) => {
                 let (area, h) = (index.mesh.area(), opts.unit_size);
                 if area < 4.0 * h * h {
                     return Err(SurfaceError::TooSmall(format!(
@@ -134,27 +129,18 @@ pub(crate) fn initial_mesh_indexed(
                 }
                 crate::layout::layout_mesh_indexed(index, &coarse, opts)?
             }
-            None => initial_grid_indexed(index, opts)?,
+            Start::Grid => initial_grid_indexed(index, opts)?,
+            Start::Unfit(why) => {
+                tried.push(format!("{} ({why})", drawn.describe()));
+                next = fallback(index, drawn, opts.unit_size);
+                continue;
+            }
         };
         let Some(fault) = crate::optimise::start_fault(index, &mesh) else {
             return Ok((mesh, named(drawn.describe(), &tried)));
         };
         tried.push(format!("{} ({fault})", drawn.describe()));
-        next = crate::auto_layout::fallback(index, drawn);
-    }
-    // the last resort: any footprint that is one sheet over its plane
-    let side = crate::triangle_layout::TRIANGLE_SIDE * opts.unit_size;
-    match crate::triangle_layout::triangle_layout(index, side) {
-        Some(coarse) => {
-            let mesh = crate::layout::layout_mesh_indexed(index, &coarse, opts)?;
-            match crate::optimise::start_fault(index, &mesh) {
-                None => return Ok((mesh, named(TRIANGULATED.into(), &tried))),
-                Some(fault) => tried.push(format!("{TRIANGULATED} ({fault})")),
-            }
-        }
-        None => tried.push(format!(
-            "{TRIANGULATED} (the footprint is not one sheet over the target's plane)"
-        )),
+        next = fallback(index, drawn, opts.unit_size);
     }
     let what = if tried.len() == 1 {
         "the layout drawn starts folded or with collapsed edges"
@@ -166,10 +152,6 @@ pub(crate) fn initial_mesh_indexed(
         tried.join(", then ")
     )))
 }
-
-/// The last automatic layout in the words of the messages.
-const TRIANGULATED: &str = "the footprint triangulated in plan, its triangles paired into quads \
-     and split (irregular vertices wherever the triangulation puts them)";
 
 /// A layout's name and the ones tried before it that did not fit.
 fn named(layout: String, tried: &[String]) -> String {
