@@ -687,6 +687,24 @@ fn obj_parts(text: &str) -> (Vec<[f64; 3]>, Vec<Vec<usize>>) {
     (vertices, faces)
 }
 
+/// `spinvalence build` of `target` at 150 mm units into `o`, the nesting held to 20,000
+/// evaluations (its result the same on any machine).
+fn build_at_150(dir: &Dir, target: &str) -> crate::util::Output {
+    dir.run(&[
+        "build",
+        "--target",
+        target,
+        "--unit-size",
+        "150",
+        "--out",
+        "o",
+        "--nest-evaluations",
+        "20000",
+        "--nest-seconds",
+        "3600",
+    ])
+}
+
 /// A courtyard that is not star-shaped about its centre (fixtures/targets/l_courtyard.obj:
 /// an 8 x 5 m rectangle round an L-shaped court, from the layout probes) folded both rings
 /// the automatic layout draws: it failed with a bare `initial face 176 is flipped against
@@ -702,19 +720,7 @@ fn obj_parts(text: &str) -> (Vec<[f64; 3]>, Vec<Vec<usize>>) {
 fn a_courtyard_with_sides_at_right_angles_is_cut_into_cells_through_to_the_sheets() {
     let dir = Dir::new();
     let target = target("l_courtyard");
-    let out = dir.run(&[
-        "build",
-        "--target",
-        &target,
-        "--unit-size",
-        "150",
-        "--out",
-        "o",
-        "--nest-evaluations",
-        "20000",
-        "--nest-seconds",
-        "3600",
-    ]);
+    let out = build_at_150(&dir, &target);
     out.expect_code(3);
     let row = out
         .stdout
@@ -819,19 +825,7 @@ fn over_the_target_through_to_the_sheets(out: &std::path::Path, target: &str) {
 fn a_roof_round_two_round_courts_is_triangulated_through_to_the_sheets() {
     let dir = Dir::new();
     let target = target("round_courtyards");
-    let out = dir.run(&[
-        "build",
-        "--target",
-        &target,
-        "--unit-size",
-        "150",
-        "--out",
-        "o",
-        "--nest-evaluations",
-        "20000",
-        "--nest-seconds",
-        "3600",
-    ]);
+    let out = build_at_150(&dir, &target);
     out.expect_code(3);
     let report = read_json(&dir.join("o/report.json"));
     let line = report["layout"].as_str().unwrap();
@@ -855,19 +849,7 @@ fn a_roof_round_two_round_courts_is_triangulated_through_to_the_sheets() {
 fn a_bridge_that_cannot_be_cut_ends_its_strip() {
     let dir = Dir::new();
     let target = target("arched_tent");
-    let out = dir.run(&[
-        "build",
-        "--target",
-        &target,
-        "--unit-size",
-        "150",
-        "--out",
-        "o",
-        "--nest-evaluations",
-        "20000",
-        "--nest-seconds",
-        "3600",
-    ]);
+    let out = build_at_150(&dir, &target);
     out.expect_code(3);
     let row = out
         .stdout
