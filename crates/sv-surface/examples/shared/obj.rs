@@ -1,35 +1,23 @@
-//! The OBJ reader the sv-surface examples share (`#[path]`-included; not an example itself).
+//! The target reader the sv-surface examples share (`#[path]`-included; not an example
+//! itself): `sv_io::read_target`, the one `spinvalence build` reads with, so that the
+//! examples' figures are the build's (the same welded vertices in the same order).
 
 use sv_surface::TargetMesh;
 
-/// Minimal OBJ reader (`v x y z`, `f a b c` with optional `/`-suffixes, 1-based).
+/// The target in OBJ or STL file `path`, welded and oriented; exits with the reader's
+/// one-line message where the file cannot be read.
 pub fn read_obj(path: &str) -> TargetMesh {
-    let text = std::fs::read_to_string(path).expect("read OBJ");
-    let mut m = TargetMesh::default();
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f64> = it.take(3).map(|s| s.parse().expect("number")).collect();
-                m.vertices.push(sv_geom::Point3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let idx: Vec<usize> = it
-                    .map(|s| {
-                        s.split('/')
-                            .next()
-                            .unwrap_or("")
-                            .parse::<usize>()
-                            .expect("index")
-                            - 1
-                    })
-                    .collect();
-                for k in 1..idx.len() - 1 {
-                    m.triangles.push([idx[0], idx[k], idx[k + 1]]);
-                }
-            }
-            _ => {}
+    let target = std::fs::read(path)
+        .map_err(|e| format!("{path}: {e}"))
+        .and_then(|bytes| sv_io::read_target(&bytes, path).map_err(|e| e.to_string()));
+    match target {
+        Ok(file) => TargetMesh {
+            vertices: file.mesh.vertices,
+            triangles: file.mesh.triangles,
+        },
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
         }
     }
-    m
 }
