@@ -105,7 +105,9 @@ pub fn initial_grid(
 /// (an O-grid round the centre of a horseshoe's plan, which lies outside it; the
 /// courtyard's ring round an L-shaped courtyard) or with edges the optimiser takes for
 /// collapsed (one face per corner where the centre lies by a boomerang's inner bend): the
-/// next one is tried (`auto_layout::fallback`). Where none fits, the error names each,
+/// next one is tried (`auto_layout::fallback`). So is one that starts unfolded but covers
+/// less of the target than the coverage goal (a four-corner grid whose corners are a
+/// horseshoe's extremes), kept only where nothing after it fits. Where none fits, the error names each,
 /// what is wrong with it and where, and the designer's layout as the lever; the last
 /// resort, the footprint triangulated (`triangle_layout.rs`), fits any footprint that is one
 /// sheet over its plane. With the mesh comes the layout's name, and where it is not the
@@ -116,6 +118,9 @@ pub(crate) fn initial_mesh_indexed(
 ) -> Result<(QuadMesh, String), SurfaceError> {
     use crate::auto_layout::{coarse_layout, fallback, Start};
     let mut tried: Vec<String> = Vec::new();
+    // the first layout that fits but leaves much of the target bare: kept in case no later
+    // one fits at all
+    let mut bare: Option<(QuadMesh, String, usize)> = None;
     let mut next = Some(coarse_layout(index, opts.unit_size));
     while let Some((drawn, start)) = next {
         let mesh = match start {
@@ -136,11 +141,33 @@ pub(crate) fn initial_mesh_indexed(
                 continue;
             }
         };
-        let Some(fault) = crate::optimise::start_fault(index, &mesh) else {
-            return Ok((mesh, named(drawn.describe(), &tried)));
-        };
-        tried.push(format!("{} ({fault})", drawn.describe()));
+        if let Some(fault) = crate::optimise::start_fault(index, &mesh) {
+            tried.push(format!("{} ({fault})", drawn.describe()));
+        } else {
+            let covered = crate::report::coverage(&mesh, index.mesh, mesh.mean_edge()).0;
+            if covered >= crate::Goals::default().coverage {
+                return Ok((mesh, named(drawn.describe(), &tried)));
+            }
+            let Some(next_layout) = fallback(index, drawn, opts.unit_size) else {
+                return Ok((mesh, named(drawn.describe(), &tried)));
+            };
+            tried.push(format!(
+                "{} (it covers {:.0} % of the target)",
+                drawn.describe(),
+                100.0 * covered
+            ));
+            if bare.is_none() {
+                bare = Some((mesh, drawn.describe(), tried.len() - 1));
+            }
+            next = Some(next_layout);
+            continue;
+        }
         next = fallback(index, drawn, opts.unit_size);
+    }
+    if let Some((mesh, name, at)) = bare {
+        // nothing later fits: the bare one, named with every other layout tried
+        tried.remove(at);
+        return Ok((mesh, named(name, &tried)));
     }
     let what = if tried.len() == 1 {
         "the layout drawn starts folded or with collapsed edges"

@@ -330,7 +330,7 @@ pub(crate) fn rhombus_fit(quad: &[Point3; 4]) -> Real {
 
 /// Area fraction of the target within `0.1 * mean` of the hub mesh (triangulated), and the
 /// sampled target point farthest from the mesh when some are not covered.
-fn coverage(mesh: &QuadMesh, target: &TargetMesh, mean: Real) -> (Real, Option<Point3>) {
+pub(crate) fn coverage(mesh: &QuadMesh, target: &TargetMesh, mean: Real) -> (Real, Option<Point3>) {
     let mut tri = TargetMesh {
         vertices: mesh.vertices.clone(),
         triangles: Vec::with_capacity(mesh.faces.len() * 4),
