@@ -214,7 +214,8 @@ pub(super) struct Problem<'a> {
     /// Per link: its first unit's hub plate lies on top of its second's at their lap.
     pub(super) on_top: Vec<bool>,
     pub(super) anchors: Vec<Anchor>,
-    /// Per vertex: a corner of the mesh (one face), held where it starts.
+    /// Per vertex: a corner of the mesh (a boundary vertex with one face, or with three or
+    /// more at a reflex corner), held where it starts.
     pub(super) corners: Vec<bool>,
     pub(super) start: Vec<Point3>,
     pub(super) model: Model,
