@@ -107,11 +107,11 @@ pub fn initial_grid(
 /// collapsed (one face per corner where the centre lies by a boomerang's inner bend): the
 /// next one is tried (`auto_layout::fallback`). So is one that starts unfolded but covers
 /// less of the target than the coverage goal (a four-corner grid whose corners are a
-/// horseshoe's extremes), kept only where nothing after it fits. Where none fits, the error names each,
-/// what is wrong with it and where, and the designer's layout as the lever; the last
-/// resort, the footprint triangulated (`triangle_layout.rs`), fits any footprint that is one
-/// sheet over its plane. With the mesh comes the layout's name, and where it is not the
-/// first, the ones tried before it.
+/// horseshoe's extremes), kept only where nothing after it fits. Where none fits, the
+/// error names each, what is wrong with it and where, and the designer's layout as the
+/// lever; the last resort, the footprint triangulated (`triangle_layout.rs`), fits any
+/// footprint that is one sheet over its plane. With the mesh comes the layout's name, and
+/// where it is not the first, the ones tried before it.
 pub(crate) fn initial_mesh_indexed(
     index: &TargetIndex<'_>,
     opts: &SecondaryOptions,

@@ -146,7 +146,8 @@ fn loop_samples(index: &TargetIndex<'_>, lp: &[usize], side: Real) -> Vec<Point3
 /// The triangles paired into quads across their shared edges where the quad is convex,
 /// the pairs whose worst corner is nearest a right angle first (greedy matching); the
 /// triangles left over stay triangles (the smoothing evens out the quads' shapes, and an
-/// unpaired triangle costs a valence-3 vertex, so any convex pair is taken). Every polygon runs the way its triangles ran.
+/// unpaired triangle costs a valence-3 vertex, so any convex pair is taken). Every
+/// polygon runs the way its triangles ran.
 fn pair_triangles(vertices: &[Point3], triangles: &[[usize; 3]]) -> Vec<Vec<usize>> {
     let mut across: HashMap<(usize, usize), usize> = HashMap::new();
     let mut pairs: Vec<(Real, usize, usize, [usize; 4])> = Vec::new();
