@@ -133,6 +133,43 @@ impl QuadMesh {
         self.faces[f].map(|v| self.vertices[v])
     }
 
+    /// Per vertex: whether it lies on an edge of only one face (faces naming vertices
+    /// past the end are skipped).
+    pub fn boundary_vertices(&self) -> Vec<bool> {
+        let mut faces_on: HashMap<(usize, usize), usize> = HashMap::new();
+        for f in &self.faces {
+            for k in 0..4 {
+                let (a, b) = (f[k], f[(k + 1) % 4]);
+                *faces_on.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        let mut boundary = vec![false; self.vertices.len()];
+        for (&(a, b), _) in faces_on.iter().filter(|(_, &n)| n == 1) {
+            for v in [a, b] {
+                if let Some(x) = boundary.get_mut(v) {
+                    *x = true;
+                }
+            }
+        }
+        boundary
+    }
+
+    /// Per vertex: a corner of the mesh, a boundary vertex with other than two faces (one
+    /// at a convex corner, three or more at a reflex one). The optimisers hold these where
+    /// they start.
+    pub fn corners(&self) -> Vec<bool> {
+        let mut faces_at = vec![0usize; self.vertices.len()];
+        for &v in self.faces.iter().flatten() {
+            if let Some(n) = faces_at.get_mut(v) {
+                *n += 1;
+            }
+        }
+        let boundary = self.boundary_vertices();
+        (0..faces_at.len())
+            .map(|v| boundary[v] && faces_at[v] != 2)
+            .collect()
+    }
+
     /// Interior edges with the two faces on them. Call after [`QuadMesh::validate`].
     pub fn links(&self) -> Vec<Link> {
         let mut by_edge: HashMap<(usize, usize), (usize, usize)> = HashMap::new();
@@ -393,6 +430,27 @@ pub fn normal_cone_residual(normals: &[Vector3]) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An L of three faces: the five convex corners (one face each) and the reflex one
+    /// (three faces, on the boundary) are corners; the two boundary vertices of two faces
+    /// are not, and nothing past the L's faces is on its boundary.
+    #[test]
+    fn an_l_has_five_convex_corners_and_one_reflex_corner() {
+        let vertices = (0..9)
+            .map(|k| Point3::new((k % 3) as Real, (k / 3) as Real, 0.0))
+            .collect();
+        let at = |i: usize, j: usize| j * 3 + i;
+        let faces = [(0, 0), (1, 0), (0, 1)]
+            .map(|(i, j)| [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)])
+            .to_vec();
+        let mesh = QuadMesh { vertices, faces };
+        let listed = |flags: Vec<bool>| -> Vec<usize> { (0..9).filter(|&v| flags[v]).collect() };
+        assert_eq!(listed(mesh.corners()), vec![0, 2, 4, 5, 6, 7]);
+        assert_eq!(
+            listed(mesh.boundary_vertices()),
+            vec![0, 1, 2, 3, 4, 5, 6, 7]
+        );
+    }
 
     #[test]
     fn grid_links_are_interior_edges() {

@@ -3,8 +3,6 @@
 //! vertex also on the boundary's tangent line there. The solve asks again at every step, so
 //! the planes follow the vertices as they move.
 
-use std::collections::HashMap;
-
 use sv_frame::{Anchor, QuadMesh};
 use sv_geom::Point3;
 
@@ -19,23 +17,9 @@ pub struct TargetSurface<'a> {
 impl<'a> TargetSurface<'a> {
     /// The target under the hub mesh `mesh`.
     pub fn new(target: &'a TargetMesh, mesh: &QuadMesh) -> Result<Self, SurfaceError> {
-        let mut edges: HashMap<(usize, usize), usize> = HashMap::new();
-        for f in &mesh.faces {
-            for k in 0..4 {
-                let (a, b) = (f[k], f[(k + 1) % 4]);
-                *edges.entry((a.min(b), a.max(b))).or_default() += 1;
-            }
-        }
-        let mut boundary = vec![false; mesh.vertices.len()];
-        for (&(a, b), &count) in &edges {
-            if count == 1 {
-                boundary[a] = true;
-                boundary[b] = true;
-            }
-        }
         Ok(Self {
             index: TargetIndex::new(target)?,
-            boundary,
+            boundary: mesh.boundary_vertices(),
         })
     }
 

@@ -141,27 +141,20 @@ pub(crate) fn initial_mesh_indexed(
                 continue;
             }
         };
-        if let Some(fault) = crate::optimise::start_fault(index, &mesh) {
-            tried.push(format!("{} ({fault})", drawn.describe()));
-        } else {
-            let covered = crate::report::coverage(&mesh, index.mesh, mesh.mean_edge()).0;
-            if covered >= crate::Goals::default().coverage {
-                return Ok((mesh, named(drawn.describe(), &tried)));
+        let fault = match crate::optimise::start_fault(index, &mesh) {
+            Some(fault) => fault,
+            None => {
+                let covered = crate::report::coverage(&mesh, index.mesh, mesh.mean_edge()).0;
+                if covered >= crate::Goals::default().coverage {
+                    return Ok((mesh, named(drawn.describe(), &tried)));
+                }
+                if bare.is_none() {
+                    bare = Some((mesh, drawn.describe(), tried.len()));
+                }
+                format!("it covers {:.0} % of the target", 100.0 * covered)
             }
-            let Some(next_layout) = fallback(index, drawn, opts.unit_size) else {
-                return Ok((mesh, named(drawn.describe(), &tried)));
-            };
-            tried.push(format!(
-                "{} (it covers {:.0} % of the target)",
-                drawn.describe(),
-                100.0 * covered
-            ));
-            if bare.is_none() {
-                bare = Some((mesh, drawn.describe(), tried.len() - 1));
-            }
-            next = Some(next_layout);
-            continue;
-        }
+        };
+        tried.push(format!("{} ({fault})", drawn.describe()));
         next = fallback(index, drawn, opts.unit_size);
     }
     if let Some((mesh, name, at)) = bare {

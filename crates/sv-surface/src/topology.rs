@@ -17,8 +17,7 @@ pub(crate) struct Star {
 
 pub(crate) struct Topology {
     pub(crate) boundary: Vec<bool>,
-    /// Boundary vertices with other than two faces: corners of the layout (one face at a
-    /// convex corner, three or more at a reflex one). They stay where they start.
+    /// The corners of the layout ([`QuadMesh::corners`]): they stay where they start.
     pub(crate) corner: Vec<bool>,
     /// Interior vertices with a closed fan.
     pub(crate) stars: Vec<Star>,
@@ -95,7 +94,7 @@ impl Topology {
                 _ => {}
             }
         }
-        let corner = (0..nv).map(|v| boundary[v] && count[v] != 2).collect();
+        let corner = mesh.corners();
         Ok(Self {
             boundary,
             corner,

@@ -328,26 +328,21 @@ const SMOOTHING_ROUNDS: usize = 30;
 fn smooth_in_plan(plan: &Plan, mesh: &mut QuadMesh) {
     let n = mesh.vertices.len();
     let mut at: Vec<[Real; 2]> = mesh.vertices.iter().map(|p| plan.at(p)).collect();
-    let mut directed = std::collections::HashSet::new();
+    // every vertex's faces and neighbours, each once; a boundary vertex stays where it is
+    let boundary = mesh.boundary_vertices();
     let mut faces_at: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); n];
     for (f, face) in mesh.faces.iter().enumerate() {
         for k in 0..4 {
-            directed.insert((face[k], face[(k + 1) % 4]));
-            faces_at[face[k]].push(f);
+            let (a, b) = (face[k], face[(k + 1) % 4]);
+            faces_at[a].push(f);
+            neighbours[a].push(b);
+            neighbours[b].push(a);
         }
-    }
-    // an interior vertex's neighbours, each once; a boundary vertex stays where it is
-    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); n];
-    let mut boundary = vec![false; n];
-    for &(a, b) in &directed {
-        if !directed.contains(&(b, a)) {
-            boundary[a] = true;
-            boundary[b] = true;
-        }
-        neighbours[a].push(b);
     }
     for list in &mut neighbours {
         list.sort_unstable();
+        list.dedup();
     }
     let convex = |face: &[usize; 4], at: &[[Real; 2]]| {
         let p = face.map(|i| at[i]);

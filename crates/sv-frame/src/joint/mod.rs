@@ -202,27 +202,6 @@ const WELD_PROGRESS: Real = 0.02;
 /// The stages of [`Problem::stiffness`].
 const STIFFNESS: [Real; 4] = [0.0, 0.03, 0.1, 0.3];
 
-/// The corners of `mesh` (`faces_at`: its faces at each vertex): boundary vertices with
-/// other than two faces, one at a convex corner and three or more at a reflex one. Held
-/// to the boundary's tangent line only, the reflex corner of an L-shaped court slid 57 mm
-/// along one of its sides, past the corner and off the boundary.
-fn mesh_corners(mesh: &QuadMesh, faces_at: &[usize]) -> Vec<bool> {
-    let mut faces_on: HashMap<(usize, usize), usize> = HashMap::new();
-    for f in &mesh.faces {
-        for k in 0..4 {
-            let (a, b) = (f[k], f[(k + 1) % 4]);
-            *faces_on.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
-    let mut corners = vec![false; faces_at.len()];
-    for (&(a, b), &n) in &faces_on {
-        for v in [a, b] {
-            corners[v] |= n == 1 && faces_at[v] != 2;
-        }
-    }
-    corners
-}
-
 fn unit_error(f: usize, e: UnitFailure) -> FrameError {
     match e {
         UnitFailure::NoHub => FrameError::Mesh(crate::MeshError::DegenerateFace {
@@ -414,12 +393,6 @@ pub fn close_joints(
             .map(|v| surface.anchor(v, &Point3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2])))
             .collect()
     };
-    let mut faces_at = vec![0usize; nv];
-    for f in &mesh.faces {
-        for &v in f {
-            faces_at[v] += 1;
-        }
-    }
     let scale = solved.hubs.iter().map(|h| h.rhombus.side()).sum::<Real>() / nf.max(1) as Real;
     let links = solved.links.len();
     let mut problem = Problem {
@@ -442,7 +415,7 @@ pub fn close_joints(
             }
             x
         }),
-        corners: mesh_corners(mesh, &faces_at),
+        corners: mesh.corners(),
         start: mesh.vertices.clone(),
         model: Model {
             spin: solved.options.spin_angle,
@@ -705,31 +678,6 @@ pub fn close_joints(
 mod tests {
     use super::*;
     use crate::{solve, SolveOptions};
-
-    /// An L of three faces: the five convex corners (one face each) and the reflex one
-    /// (three faces, on the boundary) are held; the two boundary vertices of two faces
-    /// slide along the boundary.
-    #[test]
-    fn a_reflex_corner_is_held_like_a_convex_one() {
-        let vertices = (0..9)
-            .map(|k| Point3::new((k % 3) as Real, (k / 3) as Real, 0.0))
-            .collect();
-        let at = |i: usize, j: usize| j * 3 + i;
-        let faces = [(0, 0), (1, 0), (0, 1)]
-            .map(|(i, j)| [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)])
-            .to_vec();
-        let mesh = QuadMesh { vertices, faces };
-        let mut faces_at = vec![0; 9];
-        for f in &mesh.faces {
-            for &v in f {
-                faces_at[v] += 1;
-            }
-        }
-        let held: Vec<usize> = (0..9)
-            .filter(|&v| mesh_corners(&mesh, &faces_at)[v])
-            .collect();
-        assert_eq!(held, vec![0, 2, 4, 5, 6, 7]);
-    }
 
     /// A solved 4 x 4 sphere cap as cut, its anchors (the start) and bridges along rows.
     fn cap() -> (QuadMesh, Solved, Vec<Anchor>, Vec<bool>) {
