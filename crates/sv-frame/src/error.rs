@@ -163,6 +163,23 @@ pub enum FrameError {
         /// Cause (in the message; not a `source`, so chains print it once).
         cause: sv_unit::UnitError,
     },
+    /// The joint solve pulled the hub faces far from planar and still left joints open
+    /// (given up: the frame it started from is the better one to cut).
+    #[error(
+        "closing them left {open} joints outside their limits and pulled the hub mesh far \
+         from its goals (planarity {planarity:.4} against {start:.4}, after {iterations} \
+         iterations)"
+    )]
+    PulledOff {
+        /// Joints outside their limits when it gave up.
+        open: usize,
+        /// The hub faces' planarity then (diagonal distance / mean side, largest).
+        planarity: f64,
+        /// Their planarity where the solve began.
+        start: f64,
+        /// Iterations done.
+        iterations: usize,
+    },
     /// The sparse factorisation failed (internal; please report).
     #[error("internal: sparse solve failed: {0}")]
     Linear(String),

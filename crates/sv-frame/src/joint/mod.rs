@@ -28,7 +28,7 @@ use sv_unit::Deployment;
 
 use crate::{
     evaluate, FrameError, FrameUnits, Hub, JointKind, JointLimits, JointRecord, Joints, LapGoal,
-    QuadMesh, Solved, UnitPose,
+    QuadMesh, Solved, UnitPose, GOAL_PLANARITY,
 };
 use piece::{Join, Piece};
 pub(crate) use problem::joint_record;
@@ -201,6 +201,13 @@ const ROUNDS: usize = 10;
 const WELD_PROGRESS: Real = 0.02;
 /// The stages of [`Problem::stiffness`].
 const STIFFNESS: [Real; 4] = [0.0, 0.03, 0.1, 0.3];
+/// A solve that takes the hub faces' planarity past this many times what it started with
+/// (or the goal, where it started within it) while joints are outside their limits gives
+/// up, at the end of a stage or round or at its own end: the shop cuts the hub plates
+/// flat, and its joints are open anyway. On the triangulated layouts of courtyards and a
+/// horseshoe such solves end near 0.6, from 0.015; none came back below twice the start
+/// once past it (docs/geometry.md 6.8).
+const PULLED_OFF: Real = 2.0;
 
 fn unit_error(f: usize, e: UnitFailure) -> FrameError {
     match e {
@@ -319,6 +326,39 @@ impl Descent<'_> {
         }
         *done += iterations;
         Ok(units)
+    }
+}
+
+/// How far the hub faces may leave planarity in the joint solve ([`PULLED_OFF`]): `cap`,
+/// from `start`, where the solve began.
+struct Planarity {
+    start: Real,
+    cap: Real,
+}
+
+impl Planarity {
+    /// The solve given up, with the figures, where the hub faces at `x` are past the cap
+    /// and any of the joints `records` is outside its limits, after `iterations`.
+    fn check(
+        &self,
+        problem: &Problem<'_>,
+        x: &[Real],
+        records: &[JointRecord],
+        iterations: usize,
+    ) -> Result<(), FrameError> {
+        let planarity = problem.planarity(x);
+        let open = (records.iter())
+            .filter(|j| !problem.options.limits.holds(j))
+            .count();
+        if planarity > self.cap && open > 0 {
+            return Err(FrameError::PulledOff {
+                open,
+                planarity,
+                start: self.start,
+                iterations,
+            });
+        }
+        Ok(())
     }
 }
 
@@ -500,6 +540,10 @@ pub fn close_joints(
         problem.pieces.push((piece, now * p.room));
     }
     let start = problem.figures(&x, &units);
+    let pulled_off = Planarity {
+        start: start.planarity,
+        cap: PULLED_OFF * start.planarity.max(GOAL_PLANARITY),
+    };
     // one set of normal equations for every round: the rows keep their columns whatever
     // their weights, so the pattern and its analysis are the same throughout
     let mut descent = Descent {
@@ -524,6 +568,8 @@ pub fn close_joints(
             closing.saturating_sub(descent.iterations) / (STIFFNESS.len() - stage)
         };
         units = descent.run(&mut problem, budget)?;
+        let records = problem.records(&descent.x, &units);
+        pulled_off.check(&problem, &descent.x, &records, descent.iterations)?;
     }
     let mut rounds = 0;
     // the worst weld's excess when the last round for the welds began
@@ -540,6 +586,7 @@ pub fn close_joints(
         // split there, and the welds that take their place get a round of their own, polished
         // again (a few rounds, as a round may leave a bridge beside them outside its limits).
         let records = problem.records(&descent.x, &units);
+        pulled_off.check(&problem, &descent.x, &records, descent.iterations)?;
         let failing = problem.failing_bridges(&records);
         if options.split_iterations == 0 || rounds == ROUNDS {
             break;
@@ -637,6 +684,7 @@ pub fn close_joints(
         .map(|(p, d)| chart_of(p, d.side))
         .collect();
     let evaluation = evaluate(&hubs, &solved.links, &unit_poses, &units_out)?;
+    pulled_off.check(&problem, &x, &joints, iterations)?;
     // the joints as they are on the plates as cut, after the projection onto the legs
     let end = end.measured(&joints, &evaluation.overlaps);
     let mut report = solved.report.clone();

@@ -970,18 +970,22 @@ impl Problem<'_> {
         e
     }
 
+    /// The largest diagonal distance of a hub face at `x` over its mean side.
+    pub(super) fn planarity(&self, x: &[Real]) -> Real {
+        (0..self.faces.len())
+            .map(|f| {
+                let q = self.quad(x, f);
+                let mean = (0..4).map(|k| (q[(k + 1) % 4] - q[k]).norm()).sum::<Real>() / 4.0;
+                sv_geom::quad_diagonal_distance(&q) / mean
+            })
+            .fold(0.0, Real::max)
+    }
+
     pub(super) fn figures(&self, x: &[Real], units: &[UnitPoints]) -> JointFigures {
-        let mut fig = JointFigures::default();
-        let sides = |f: usize| {
-            let q = self.quad(x, f);
-            (0..4).map(|k| (q[(k + 1) % 4] - q[k]).norm()).sum::<Real>() / 4.0
+        let mut fig = JointFigures {
+            planarity: self.planarity(x),
+            ..JointFigures::default()
         };
-        for f in 0..self.faces.len() {
-            let q = self.quad(x, f);
-            fig.planarity = fig
-                .planarity
-                .max(sv_geom::quad_diagonal_distance(&q) / sides(f));
-        }
         for (v, a) in self.anchors.iter().enumerate() {
             let p = Point3::new(x[3 * v], x[3 * v + 1], x[3 * v + 2]);
             fig.closeness = fig.closeness.max((p - a.point).dot(&a.normal).abs());
