@@ -895,17 +895,17 @@ fn a_bridge_that_cannot_be_cut_ends_its_strip() {
 
 /// A joint solve that pulls the hub faces far from planar while joints stay open gives up
 /// where it does, in each strip direction, and the build keeps the frame it started from:
-/// the boomerang's triangulated footprint at 300 mm took the solve from planarity 0.013 to
-/// 0.6 over 460 iterations before the build threw the result away; it now stops after the
-/// first stage of 92. Measured with the test's own code: mesh.obj's faces are as planar as
-/// the message says the solve started, well inside what it names as pulled.
+/// on the horseshoe's triangulated footprint at 300 mm the solve took planarity from 0.015
+/// to 0.6 over 390-460 iterations before the build threw the result away; it now stops
+/// after the first stage of 92. Measured with the test's own code: mesh.obj's faces are as
+/// planar as the message says the solve started, far inside what it names as pulled.
 #[test]
 fn a_joint_solve_that_pulls_the_hub_faces_off_planar_gives_up_early() {
     let dir = Dir::new();
     let out = dir.run(&[
         "build",
         "--target",
-        &target("boomerang"),
+        &target("horseshoe"),
         "--unit-size",
         "300",
         "--out",
@@ -968,7 +968,7 @@ fn a_joint_solve_that_pulls_the_hub_faces_off_planar_gives_up_early() {
     for (pulled, start, iterations) in figures {
         // the default budget is 250 iterations per direction, more with the rounds
         assert!(iterations < 250, "{line}");
-        assert!(pulled > 2.0 * start.max(0.002), "{line}");
+        assert!(pulled > 0.1 && pulled > 2.0 * start.max(0.002), "{line}");
         assert!(
             (planarity - start).abs() < 1e-4,
             "mesh.obj {planarity} against {line}"

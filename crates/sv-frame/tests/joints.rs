@@ -336,9 +336,13 @@ fn face_sides_are_held_within_the_hub_meshs_goal() {
     };
     let longest = |m: &QuadMesh| sides(m).into_iter().fold(0.0, f64::max);
     let limit = 0.995 * longest(&mesh);
+    // held this tight, the cap's joints do not all close without faces 0.005 from planar
+    // (2.5 times the goal), where the solve would give up: the rows for the sides are what
+    // is tested here
     let options = JointOptions {
         max_iterations: 60,
         face_sides: Some((0.0, limit)),
+        give_up: false,
         ..Default::default()
     };
     let (held, _, _) = close_rows(&mesh, &solved, &options);
