@@ -16,7 +16,7 @@ use sv_nest::part::point_in_polygon;
 use crate::build::{default_build, saddle_build};
 use crate::report::parse_csv;
 use crate::sheets::flatten;
-use crate::util::{dxf_entities, num, read_json, Dir, DxfEntity};
+use crate::util::{diagonals_cross, dot3, dxf_entities, num, read_json, sub3, Dir, DxfEntity};
 
 type P = [f64; 2];
 
@@ -42,22 +42,14 @@ fn corners(v: &Value) -> Vec<[f64; 3]> {
 /// the one the 3D corners run counter-clockwise about).
 fn hub_towards_viewer(unit: &Value, flat: &[P]) -> bool {
     let (p, h) = (corners(&unit["primary"]), corners(&unit["hub"]));
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let (d1, d2) = (sub(p[2], p[0]), sub(p[3], p[1]));
-    let n = [
-        d1[1] * d2[2] - d1[2] * d2[1],
-        d1[2] * d2[0] - d1[0] * d2[2],
-        d1[0] * d2[1] - d1[1] * d2[0],
-    ];
+    let n = diagonals_cross(&p);
     let mean = |q: &[[f64; 3]]| {
         let s = q
             .iter()
             .fold([0.0; 3], |a, c| [a[0] + c[0], a[1] + c[1], a[2] + c[2]]);
         s.map(|x| x / q.len() as f64)
     };
-    let up = sub(mean(&h), mean(&p));
-    let height = (up[0] * n[0] + up[1] * n[1] + up[2] * n[2])
-        / (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let height = dot3(sub3(mean(&h), mean(&p)), n) / dot3(n, n).sqrt();
     let area: f64 = (0..flat.len())
         .map(|i| {
             let (a, b) = (flat[i], flat[(i + 1) % flat.len()]);

@@ -9,7 +9,7 @@ use serde_json::Value;
 
 use crate::build::{default_build, saddle_build};
 use crate::ezdxf::venv_python;
-use crate::util::{read_json, Dir};
+use crate::util::{diagonals_cross, dot3, read_json, Dir};
 
 /// Run the fold check on `dir/out`; `(exit code, stdout, figures)`.
 fn fold_check(dir: &Dir) -> (i32, String, Value) {
@@ -460,16 +460,8 @@ fn a_pose_moved_2_mm_or_a_neck_moved_2_mm_fails_both_checks_naming_the_unit() {
     let p: Vec<[f64; 3]> = (0..4)
         .map(|i| std::array::from_fn(|k| unit["primary"][i][k].as_f64().unwrap()))
         .collect();
-    let (d1, d2) = (
-        [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]],
-        [p[3][0] - p[1][0], p[3][1] - p[1][1], p[3][2] - p[1][2]],
-    );
-    let n = [
-        d1[1] * d2[2] - d1[2] * d2[1],
-        d1[2] * d2[0] - d1[0] * d2[2],
-        d1[0] * d2[1] - d1[1] * d2[0],
-    ];
-    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let n = diagonals_cross(&p);
+    let len = dot3(n, n).sqrt();
     for (i, c) in p.iter().enumerate() {
         for k in 0..3 {
             unit["primary"][i][k] = (c[k] + 2.0 * n[k] / len).into();

@@ -3,7 +3,7 @@
 //! metres or as an OBJ triangle soup.
 
 use crate::fixtures;
-use crate::util::{read_json, Dir};
+use crate::util::{diagonals_cross, dot3, read_json, sub3, Dir};
 
 /// The wave canopy (z = 350 sin(x/1000) cos(y/1400), 6 x 4 m): its four-sided layout cannot
 /// follow the curvature lines, so planarity is unmet (docs/secondary.md).
@@ -945,23 +945,14 @@ fn a_joint_solve_that_pulls_the_hub_faces_off_planar_gives_up_early() {
         .iter()
         .map(|f| {
             let p: Vec<[f64; 3]> = f.iter().map(|&v| vertices[v]).collect();
-            let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-            let (d1, d2) = (sub(p[2], p[0]), sub(p[3], p[1]));
-            let n = [
-                d1[1] * d2[2] - d1[2] * d2[1],
-                d1[2] * d2[0] - d1[0] * d2[2],
-                d1[0] * d2[1] - d1[1] * d2[0],
-            ];
-            let w = sub(p[1], p[0]);
-            let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-            let distance = ((w[0] * n[0] + w[1] * n[1] + w[2] * n[2]) / norm).abs();
-            let mean = (0..4)
-                .map(|k| {
-                    let e = sub(p[(k + 1) % 4], p[k]);
-                    (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt()
-                })
-                .sum::<f64>()
-                / 4.0;
+            // the distance between the diagonals' lines over the mean side
+            let n = diagonals_cross(&p);
+            let distance = (dot3(sub3(p[1], p[0]), n) / dot3(n, n).sqrt()).abs();
+            let side = |k: usize| {
+                let e = sub3(p[(k + 1) % 4], p[k]);
+                dot3(e, e).sqrt()
+            };
+            let mean = (0..4).map(side).sum::<f64>() / 4.0;
             distance / mean
         })
         .fold(0.0, f64::max);

@@ -150,6 +150,27 @@ pub fn num(v: &serde_json::Value, what: &str) -> f64 {
         .unwrap_or_else(|| panic!("{what} is not a number: {v}"))
 }
 
+/// `a - b`.
+pub fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// `a . b`.
+pub fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The cross product of a quad's diagonals, `(q[2] - q[0]) x (q[3] - q[1])`: normal to
+/// both, so to the plane a nearly planar quad lies in.
+pub fn diagonals_cross(q: &[[f64; 3]]) -> [f64; 3] {
+    let (d1, d2) = (sub3(q[2], q[0]), sub3(q[3], q[1]));
+    [
+        d1[1] * d2[2] - d1[2] * d2[1],
+        d1[2] * d2[0] - d1[0] * d2[2],
+        d1[0] * d2[1] - d1[1] * d2[0],
+    ]
+}
+
 /// One entity of an ASCII DXF: its kind (`LWPOLYLINE`, `POINT`, `TEXT`, ...), layer, closed
 /// flag, points `[x, y, bulge]` (every 10/20 pair; a POINT or TEXT has one) and text.
 pub struct DxfEntity {
