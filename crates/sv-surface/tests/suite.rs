@@ -342,7 +342,8 @@ fn a_run_that_cannot_meet_every_goal_stops_once_it_no_longer_gains() {
 /// 1.5 m band bent round a half circle, half-round ends). The O-grid round that centre
 /// folds; the four-corner grid drawn next faces up but leaves the legs' ends bare (its
 /// corners are the footprint's extremes along the diagonals: it started covering 63 % at
-/// 300 mm and ended with faces of 6.9 units); so the triangulated footprint is drawn, which covers it.
+/// 300 mm and ended with faces of 6.9 units); so the triangulated footprint is drawn, which
+/// covers it.
 /// Measured here in plan with this test's own code: the area of the target whose triangles'
 /// centres lie under a face of the hub mesh.
 #[test]

@@ -372,11 +372,13 @@ impl Planarity {
             return Ok(());
         }
         let planarity = problem.planarity(x);
-        let limit = if end { self.cap } else { self.far };
+        if planarity <= if end { self.cap } else { self.far } {
+            return Ok(());
+        }
         let open = (records.iter())
             .filter(|j| !problem.options.limits.holds(j))
             .count();
-        if planarity > limit && open > 0 {
+        if open > 0 {
             return Err(FrameError::PulledOff {
                 open,
                 planarity,
