@@ -9,7 +9,7 @@ use serde_json::Value;
 
 use crate::build::{default_build, saddle_build};
 use crate::ezdxf::venv_python;
-use crate::util::{diagonals_cross, dot3, read_json, Dir};
+use crate::util::{diagonals_cross, dot3, read_json, unmet_goals, Dir};
 
 /// Run the fold check on `dir/out`; `(exit code, stdout, figures)`.
 fn fold_check(dir: &Dir) -> (i32, String, Value) {
@@ -121,41 +121,47 @@ fn worst(out: &crate::util::Output, name: &str) -> f64 {
         .unwrap_or_else(|| panic!("no figure in row {name}: {out:?}"))
 }
 
+/// Rows of `spinvalence check` and our figure for each: the hub lap, weld gap, reach
+/// (between strips and across a bridge's slot), hub plates into each other, widest and
+/// closest gap between lapping hub plates, a lap's overlap along the line of centres, a
+/// leg into the neighbour's hub plate or rim.
+const CHECK_ROWS: [(&str, &str); 10] = [
+    ("hub lap as cut", "lap_min"),
+    ("weld: plates of neighbouring strips apart", "weld_gap_max"),
+    (
+        "plates of neighbouring strips reach into each other",
+        "reach_max",
+    ),
+    (
+        "bridge: plates into each other across the slot",
+        "bridge_reach_max",
+    ),
+    ("hub plates at a lap into each other", "hub_stack_lift_max"),
+    (
+        "hub plates at a lap, widest gap between them",
+        "hub_stack_gap_max",
+    ),
+    (
+        "hub plates at a lap, closest gap between them",
+        "hub_stack_closest_max",
+    ),
+    (
+        "hub lap, the plates' overlap along the line of centres",
+        "lap_overlap_along_min",
+    ),
+    (
+        "leg through the neighbour's hub plate, outside its relief",
+        "leg_through_hub_plate_max",
+    ),
+    ("leg through a neighbour's rim", "leg_into_rim_max"),
+];
+
 /// `spinvalence check`'s worst hub lap, weld gap, reach (between strips and across a
 /// bridge's slot), hub plates into each other, a leg into the neighbour's hub plate or rim
 /// and widest gap between lapping hub plates are the fold check's, 0.1 mm; how deep a
 /// relief reaches under the plate on it, 0.25 mm.
 fn agrees_with_check(checked: &crate::util::Output, fig: &Value) {
-    for (name, ours) in [
-        ("hub lap as cut", "lap_min"),
-        ("weld: plates of neighbouring strips apart", "weld_gap_max"),
-        (
-            "plates of neighbouring strips reach into each other",
-            "reach_max",
-        ),
-        (
-            "bridge: plates into each other across the slot",
-            "bridge_reach_max",
-        ),
-        ("hub plates at a lap into each other", "hub_stack_lift_max"),
-        (
-            "hub plates at a lap, widest gap between them",
-            "hub_stack_gap_max",
-        ),
-        (
-            "hub plates at a lap, closest gap between them",
-            "hub_stack_closest_max",
-        ),
-        (
-            "hub lap, the plates' overlap along the line of centres",
-            "lap_overlap_along_min",
-        ),
-        (
-            "leg through the neighbour's hub plate, outside its relief",
-            "leg_through_hub_plate_max",
-        ),
-        ("leg through a neighbour's rim", "leg_into_rim_max"),
-    ] {
+    for (name, ours) in CHECK_ROWS {
         let theirs = worst(checked, name);
         assert!(
             (theirs - f(fig, ours)).abs() <= 0.1,
@@ -326,10 +332,10 @@ fn at_200_mm_every_target_folds_and_closes_every_joint() {
 /// `[frame] overlap = "constant"`: by our own fold code every hub lap as cut within 1 mm of
 /// the one lap frame.json asks (a spread of at most 2 mm), at least the weld minimum and as
 /// reported; every leg within 0.5 mm and clear of the hub plate it passes (a relief cut
-/// for it). Not every weld closes with the laps held (docs/config.md: 1-5 stay open), so
-/// the welds are not asserted here; every hub mesh goal is met (exit 0: until the joint
-/// solve held the face sides, the dome's longest ended at 1.41 of the unit size, goal 1.4);
-/// `check` agrees with our figures. About ten minutes: `make acceptance`.
+/// for it). Not every weld closes with the laps held (docs/config.md: 3-11 stay open), so
+/// the welds are not asserted here (the build names them: exit 3); every hub mesh goal is
+/// met (until the joint solve held the face sides, the dome's longest ended at 1.41 of the
+/// unit size, goal 1.4); `check` agrees with our figures. About ten minutes: `make acceptance`.
 #[test]
 #[ignore = "ten minutes: make acceptance"]
 fn a_constant_overlap_holds_every_lap_within_1_mm_at_300_mm() {
@@ -341,7 +347,15 @@ fn a_constant_overlap_holds_every_lap_within_1_mm_at_300_mm() {
             args.extend(["--target", target]);
         }
         args.extend(crate::build::NEST_WORK);
-        dir.run(&args).expect_code(0);
+        // every hub mesh goal met; the welds left open with the laps held are the fold
+        // check's (exit 3 where it names any)
+        let built = dir.run(&args);
+        let unmet = unmet_goals(&dir, "out");
+        built.expect_code(if unmet.is_empty() { 0 } else { 3 });
+        assert!(
+            unmet.iter().all(|u| u.starts_with("fold check: ")),
+            "{target}: {unmet:?}"
+        );
         let frame = read_json(&dir.join("out/frame.json"));
         let asked = &frame["params"]["hub_lap"];
         assert_eq!(asked["tolerance"], 1.0, "{target}: {asked}");
@@ -441,6 +455,40 @@ fn holds_at_200_mm(what: &str, args: &[&str]) {
     checked.expect_code(0);
 }
 
+/// Every row an unmet goal `fold check: ...` names as failing (`NAME (UNIT) WORST (limit
+/// LIMIT) at PLACE`) is one our own fold code measures past its limit too, within 0.1 mm;
+/// at least one is named.
+fn failures_are_ours(goal: &str, fig: &Value) {
+    let mut named = 0;
+    for (name, ours) in CHECK_ROWS {
+        let Some(at) = goal.find(&format!("{name} (")) else {
+            continue;
+        };
+        let figures: Vec<f64> = goal[at + name.len()..]
+            .split(|c: char| c.is_whitespace() || c == '(' || c == ')')
+            .filter_map(|w| w.parse().ok())
+            .take(2)
+            .collect();
+        let [worst, limit] = figures[..] else {
+            panic!("no worst and limit for {name} in {goal}")
+        };
+        let ours = f(fig, ours);
+        assert!(
+            (ours - worst).abs() <= 0.1,
+            "{name}: {worst} vs ours {ours}"
+        );
+        // a smallest (the lap) fails below its limit, the others above it
+        let past = if name.starts_with("hub lap") {
+            ours < limit
+        } else {
+            ours > limit
+        };
+        assert!(past, "{name}: ours {ours} within the limit {limit}: {goal}");
+        named += 1;
+    }
+    assert!(named > 0, "no row we measure is named: {goal}");
+}
+
 /// The row of `check`'s table that starts with `name`.
 fn row<'a>(out: &'a crate::util::Output, name: &str) -> &'a str {
     out.stdout
@@ -533,7 +581,14 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
     fs::write(dir.join("quick.toml"), quick).unwrap();
     let args = ["--target", "builtin:flat", "--unit-size", "200"];
     let built = dir.run(&[&["build", "--config", "quick.toml"][..], &args].concat());
-    built.expect_code(0);
+    // 40 iterations leave the parts as cut short of closing: the fold check's failing rows
+    // are the one goal not met (exit 3), each as our own fold code measures it (below)
+    built.expect_code(3);
+    let unmet = unmet_goals(&dir, "out");
+    assert!(
+        unmet.len() == 1 && unmet[0].starts_with("fold check: "),
+        "{unmet:?}"
+    );
     let sheet = row(&built, "sheet");
     assert!(sheet.contains("1.500 mm at its least widths"), "{sheet}");
     assert!(
@@ -554,6 +609,7 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
     assert_eq!(fig["legs_checked"], 4 * units, "{stdout}");
     assert!(f(&fig, "leg_error_max") <= 0.5, "{fig}");
     assert!(f(&fig, "lap_min") >= 25.0, "{fig}");
+    failures_are_ours(&unmet[0], &fig);
 
     fs::write(
         dir.join("given.toml"),

@@ -144,6 +144,17 @@ pub fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
+/// The goals a build in `dir/out` names as not met (`report.json`'s `unmet`).
+pub fn unmet_goals(dir: &Dir, out: &str) -> Vec<String> {
+    let report = read_json(&dir.join(&format!("{out}/report.json")));
+    report["unmet"]
+        .as_array()
+        .unwrap_or_else(|| panic!("{out}/report.json has no unmet goals: {report}"))
+        .iter()
+        .map(|l| l.as_str().unwrap().to_string())
+        .collect()
+}
+
 /// A JSON number as f64 (panics with the path when it is not a number).
 pub fn num(v: &serde_json::Value, what: &str) -> f64 {
     v.as_f64()

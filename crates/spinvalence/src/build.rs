@@ -384,15 +384,14 @@ fn check_units(spec: &str, mesh: &TargetMesh, unit: f64) -> Result<()> {
     )
 }
 
-/// What a finished build reports back: the hub mesh goals it could not meet (empty when
-/// every goal holds), one line each naming the worst place.
+/// What a finished build reports back: the goals it could not meet (empty when every goal
+/// holds), one line each naming the worst place.
 pub struct Outcome {
-    /// Unmet goals of the hub mesh (`SecondaryReport::unmet`).
+    /// Unmet goals (`SecondaryReport::unmet`): the hub mesh's, then laps too short to
+    /// weld, joints not closed, parts that cannot be cut or that fail the fold check.
     pub unmet: Vec<String>,
     /// Where the files went.
     pub out: std::path::PathBuf,
-    /// The fold check's failing rows, as one warning line (`spinvalence check DIR`).
-    pub fold_warning: Option<String>,
     /// Whether the strips could not be cut: only the hub mesh, the frame and the report
     /// were written.
     pub partial: bool,
@@ -687,7 +686,6 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
             return Ok(Outcome {
                 unmet: report.unmet.clone(),
                 out: cfg.out.clone(),
-                fold_warning: None,
                 partial: true,
             });
         }
@@ -706,6 +704,11 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
         },
     );
     let strips_s = t2.elapsed().as_secs_f64();
+    // the parts as cut are the truth: a row of their fold check that fails (an open weld,
+    // a leg through a neighbour) is a goal not met, as `spinvalence check DIR` says
+    if let Some(failed) = fold_failures(&fold) {
+        report.unmet.push(failed);
+    }
 
     let t3 = Instant::now();
     let parts: Vec<sv_export::SheetPart> = stage
@@ -800,7 +803,6 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     Ok(Outcome {
         unmet: report.unmet.clone(),
         out: cfg.out.clone(),
-        fold_warning: fold_warning(&fold),
         partial: false,
     })
 }
@@ -844,12 +846,12 @@ fn strips_row(stage: &strips::StripsStage, frame: &sv_frame::FrameFile) -> Strin
     row
 }
 
-/// The fold check's failing rows as one warning line, if any fails.
-fn fold_warning(fold: &sv_frame::CheckReport) -> Option<String> {
+/// The fold check's failing rows as one unmet goal, if any fails.
+fn fold_failures(fold: &sv_frame::CheckReport) -> Option<String> {
     let failed = crate::check::failures(fold);
     (!failed.is_empty()).then(|| {
         format!(
-            "warning: fold check: {} of {} rows fail on the parts as cut: {}",
+            "fold check: {} of {} rows fail on the parts as cut: {}",
             failed.len(),
             fold.rows.len(),
             failed.join("; ")

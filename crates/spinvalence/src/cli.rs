@@ -90,7 +90,8 @@ cannot be cut: the hub mesh, frame and report only, exit code 3).
 
 Exit codes: 0 every goal met; 3 built and written, but some goals are not met (the hub
 mesh's planarity, conical, distance to target or boundary, coverage, edge ratio, face
-sides; hub laps long enough to weld; parts that can be cut): the summary and report.html
+sides; hub laps long enough to weld; parts that can be cut; every row of the fold check of
+the parts as cut, an open weld say): the summary and report.html
 name each with its worst place, and where the strips could not be cut only the hub mesh,
 the frame and the report are written; 2 bad input or usage, or with --strict unmet goals
 (the files are still written, to look at).";
