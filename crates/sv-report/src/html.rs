@@ -351,8 +351,7 @@ fn quality_table(input: &ReportInput<'_>) -> String {
 
 fn frame_section(input: &ReportInput<'_>) -> String {
     let e = input.frame.params.expansion;
-    let unmet = input.hub_mesh.is_some_and(|m| !m.unmet.is_empty());
-    let goals_radio = if unmet {
+    let goals_radio = if goal_flags(input).iter().any(|g| !g.is_empty()) {
         "\n<label><input type=\"radio\" name=\"colour\" value=\"goals\"> unmet goals</label>"
     } else {
         ""
@@ -660,13 +659,43 @@ fn view_data(input: &ReportInput<'_>) -> Value {
     })
 }
 
+/// Per unit, the goals not met there (empty lists when all hold): the hub mesh's
+/// ([`hub_mesh_flags`]) and, for each row of the fold check that fails on the parts as
+/// cut, the units its worst place names (`link 12 (A06-01 - A07-01)`: both). Empty when
+/// the build met every goal.
+fn goal_flags(input: &ReportInput<'_>) -> Vec<Vec<String>> {
+    let frame = input.frame;
+    let mut flags = hub_mesh_flags(input);
+    let failing = input
+        .fold_check
+        .iter()
+        .flat_map(|fold| &fold.rows)
+        .filter(|r| !r.ok);
+    for row in failing {
+        let named = row
+            .at
+            .split(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
+            .filter_map(|word| frame.units.iter().position(|u| u.id == word));
+        for u in named {
+            if flags.is_empty() {
+                flags = vec![Vec::new(); frame.units.len()];
+            }
+            let goal = format!("fold check: {}", row.name);
+            if !flags[u].contains(&goal) {
+                flags[u].push(goal);
+            }
+        }
+    }
+    flags
+}
+
 /// Per unit, the hub mesh goals not met there (empty lists when all hold): faces whose
 /// planarity, sides or edge ratio miss the goal, the faces around vertices whose conical
 /// residual does, and the faces at the worst vertex of the distance goals the report
-/// names. Empty when the build met every goal.
-fn goal_flags(input: &ReportInput<'_>) -> Value {
+/// names. Empty when the hub mesh met every goal.
+fn hub_mesh_flags(input: &ReportInput<'_>) -> Vec<Vec<String>> {
     let Some(m) = input.hub_mesh.filter(|m| !m.unmet.is_empty()) else {
-        return Value::Array(Vec::new());
+        return Vec::new();
     };
     let frame = input.frame;
     let mesh = QuadMesh {
@@ -720,14 +749,14 @@ fn goal_flags(input: &ReportInput<'_>) -> Value {
     if unmet("distance to boundary") {
         at_vertex(m.boundary_worst_vertex, "distance to boundary");
     }
-    let by_face: std::collections::HashMap<usize, &Vec<&str>> = flags.iter().enumerate().collect();
-    Value::Array(
-        frame
-            .units
-            .iter()
-            .map(|u| json!(by_face.get(&u.face).map_or(&Vec::new(), |v| *v)))
-            .collect(),
-    )
+    frame
+        .units
+        .iter()
+        .map(|u| {
+            let at = flags.get(u.face).map_or(&[][..], |v| &v[..]);
+            at.iter().map(|g| g.to_string()).collect()
+        })
+        .collect()
 }
 
 /// Text for a raw-text `<script>` element: `</script` and `<!--` cannot occur in it.

@@ -60,7 +60,7 @@ const MODES = {
     values: overlapMin,
   },
   strip: { title: 'strip' },
-  goals: { title: 'hub mesh goals not met here (red)' },
+  goals: { title: 'goals not met here (red): the hub mesh\'s, and the worst place of each failing row of the fold check' },
 };
 const GOAL_RED = '#d62728';
 const GOAL_GREY = '#c9ccd1';

@@ -211,10 +211,27 @@ fn the_fold_check_is_shown_with_its_failing_rows_marked() {
     };
     let without = report_html(&input(&frame, &strips, None)).unwrap();
     assert!(!without.contains("Fold check of the parts as cut"));
+    assert!(!without.contains("value=\"goals\""));
     let mut shown = input(&frame, &strips, None);
     shown.fold_check = Some(&fold);
     let html = report_html(&shown).unwrap();
     assert!(html.contains("Fold check of the parts as cut"));
+    // a failing row is a goal not met: the 3D view can show it at the units its worst
+    // place names (here none)
+    assert!(!html.contains("value=\"goals\""));
+    let flag = "[\"fold check: weld: plates apart (mm)\"]";
+    assert_eq!(
+        html.matches(flag).count(),
+        0,
+        "a unit flagged by a place naming none"
+    );
+    let mut named = fold.clone();
+    named.rows[1].at = format!("link 4 ({} - {})", frame.units[2].id, frame.units[6].id);
+    shown.fold_check = Some(&named);
+    let flagged = report_html(&shown).unwrap();
+    assert_eq!(flagged.matches(flag).count(), 2, "both units of the weld");
+    assert!(flagged.contains("value=\"goals\""), "no unmet-goals view");
+    shown.fold_check = Some(&fold);
     assert!(html.contains("1 of 3 rows fail"), "verdict missing");
     assert_eq!(html.matches("<tr class=\"fail\">").count(), 1);
     assert!(html.contains(
@@ -227,4 +244,5 @@ fn the_fold_check_is_shown_with_its_failing_rows_marked() {
     shown.fold_check = Some(&held);
     let html = report_html(&shown).unwrap();
     assert!(html.contains("Every row holds") && !html.contains("<tr class=\"fail\">"));
+    assert!(!html.contains("value=\"goals\""));
 }
