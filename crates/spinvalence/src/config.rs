@@ -338,6 +338,10 @@ pub struct JointsConfig {
     /// joints hold better (`[strips] direction` is tried first); `--strip-direction` on the
     /// command line tries only the direction it names.
     pub both_directions: bool,
+    /// Where the kept direction ends with joints just outside their limits (none by more
+    /// than twice them), solve it once more with twice `max_iterations` and keep whichever
+    /// holds better.
+    pub longer_solve: bool,
 }
 
 impl Default for JointsConfig {
@@ -347,6 +351,7 @@ impl Default for JointsConfig {
             max_iterations: sv_frame::JointOptions::default().max_iterations,
             split_iterations: sv_frame::JointOptions::default().split_iterations,
             both_directions: true,
+            longer_solve: true,
         }
     }
 }
