@@ -945,12 +945,14 @@ fn frame_texts(
 type Closed = (sv_frame::QuadMesh, sv_frame::Solved, sv_frame::JointReport);
 /// One strip direction's joint solve: how well its joints hold, the direction and the
 /// frame, or why it failed.
-type Attempt = std::result::Result<(JointScore, sv_strips::StripDirection, Closed), String>;
+type Attempt = std::result::Result<Kept, String>;
+/// A strip direction's joint solve that could be kept: its score, direction and frame.
+type Kept = (JointScore, sv_strips::StripDirection, Closed);
 
 /// Where the kept strip direction ends with joints outside their limits, but none by more
-/// than this many times (a weld at most 3 mm apart against 1.5), it is solved once more with
-/// twice the iterations (`[joints] longer_solve`): at 300 mm the torus patch ended with 6
-/// welds open (2.77 mm) after 250 iterations and closed every joint with 500.
+/// than this many times (a weld at most 3 mm apart against 1.5), every direction is solved
+/// once more with twice the iterations (`[joints] longer_solve`): at 300 mm the torus patch
+/// ended with 6 welds open (2.77 mm) after 250 iterations and closed every joint with 500.
 const LONGER_SOLVE_WITHIN: f64 = 2.0;
 
 /// The joint solve of a build (`[joints] close`): the hub mesh and every unit's plates
@@ -1040,32 +1042,45 @@ fn close_the_joints(
                 Err(e) => Err(format!("strips along {}: {e}", direction_name(direction))),
             })
         };
-    let attempts: Vec<Result<Attempt>> = directions
-        .par_iter()
-        .map(|&direction| solve_in(direction, cfg.joints.max_iterations))
-        .collect();
-    let mut best: Option<(JointScore, sv_strips::StripDirection, Closed)> = None;
-    let mut failed = Vec::new();
-    for attempt in attempts {
-        match attempt? {
-            Ok((score, direction, closed)) => {
-                if best.as_ref().is_none_or(|(s, _, _)| score.better_than(s)) {
-                    best = Some((score, direction, closed));
+    // the best of every direction tried with `max_iterations`: the first kept where both
+    // hold as well; where none could be solved, why, for each
+    let best_of = |max_iterations: usize| -> Result<std::result::Result<Kept, Vec<String>>> {
+        let attempts: Vec<Result<Attempt>> = directions
+            .par_iter()
+            .map(|&direction| solve_in(direction, max_iterations))
+            .collect();
+        let mut best: Option<Kept> = None;
+        let mut failed = Vec::new();
+        for attempt in attempts {
+            match attempt? {
+                Ok((score, direction, closed)) => {
+                    if best.as_ref().is_none_or(|(s, _, _)| score.better_than(s)) {
+                        best = Some((score, direction, closed));
+                    }
                 }
+                Err(why) => failed.push(why),
             }
-            Err(why) => failed.push(why),
         }
-    }
-    // joints left just outside their limits: the kept direction once more with twice the
+        Ok(best.ok_or(failed))
+    };
+    let mut best = best_of(cfg.joints.max_iterations)?;
+    // joints left just outside their limits: every direction once more with twice the
     // iterations, kept where it holds better
     let mut longer = None;
-    if let Some((score, direction, (_, _, first))) = &best {
+    if let Ok((score, _, (_, _, first))) = &best {
         if cfg.joints.longer_solve && score.nearly_holds() {
             let iterations = 2 * cfg.joints.max_iterations;
-            let again = solve_in(*direction, iterations)?;
+            let again = best_of(iterations)?;
             let (after, kept) = match &again {
-                Ok((s, _, _)) => (format!("{} outside them", s.failing), s.better_than(score)),
-                Err(why) => (format!("failed ({why})"), false),
+                Ok((s, d, _)) => (
+                    format!(
+                        "{} outside them (strips along {})",
+                        s.failing,
+                        direction_name(*d)
+                    ),
+                    s.better_than(score),
+                ),
+                Err(why) => (format!("failed ({})", why.join("; ")), false),
             };
             let verdict = if kept {
                 "kept"
@@ -1073,20 +1088,19 @@ fn close_the_joints(
                 "not kept (it held no better)"
             };
             longer = Some(format!(
-                "strips along {}: {} joints outside their limits after {} iterations, none past \
+                "{} joints outside their limits after {} iterations, none past \
                  {LONGER_SOLVE_WITHIN} times its limit; solved again with max_iterations \
                  {iterations}: {after}, {verdict}",
-                direction_name(*direction),
-                score.failing,
-                first.iterations,
+                score.failing, first.iterations,
             ));
             if kept {
-                best = again.ok();
+                best = again;
             }
         }
     }
-    let Some((_, direction, (mesh, solved, joint_report))) = best else {
-        return Ok((Err(failed.join("; ")), longer));
+    let (_, direction, (mesh, solved, joint_report)) = match best {
+        Ok(kept) => kept,
+        Err(failed) => return Ok((Err(failed.join("; ")), longer)),
     };
     // the hub mesh moved: its goals are measured again (conicality, the paper's stand-in
     // for tiles that can meet, is not held where the joints themselves are closed)

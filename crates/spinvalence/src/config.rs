@@ -339,8 +339,8 @@ pub struct JointsConfig {
     /// command line tries only the direction it names.
     pub both_directions: bool,
     /// Where the kept direction ends with joints just outside their limits (none by more
-    /// than twice them), solve it once more with twice `max_iterations` and keep whichever
-    /// holds better.
+    /// than twice them), solve every direction tried once more with twice `max_iterations`
+    /// and keep the best, where it holds better.
     pub longer_solve: bool,
 }
 
