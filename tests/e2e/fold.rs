@@ -402,7 +402,7 @@ fn a_frame_whose_welds_end_just_open_is_solved_again_with_twice_the_iterations()
     built.expect_code(0);
     let longer = row(&built, "longer solve");
     assert!(
-        longer.contains("solved again with max_iterations 500: 0 outside them")
+        longer.contains("solved again with max_iterations 500: 0 joints outside their limits")
             && longer.ends_with(", kept"),
         "{longer}"
     );

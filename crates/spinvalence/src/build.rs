@@ -1073,11 +1073,7 @@ fn close_the_joints(
             let again = best_of(iterations)?;
             let (after, kept) = match &again {
                 Ok((s, d, _)) => (
-                    format!(
-                        "{} outside them (strips along {})",
-                        s.failing,
-                        direction_name(*d)
-                    ),
+                    format!("{} (strips along {})", s.describe(), direction_name(*d)),
                     s.better_than(score),
                 ),
                 Err(why) => (format!("failed ({})", why.join("; ")), false),
@@ -1088,10 +1084,10 @@ fn close_the_joints(
                 "not kept (it held no better)"
             };
             longer = Some(format!(
-                "{} joints outside their limits after {} iterations, none past \
-                 {LONGER_SOLVE_WITHIN} times its limit; solved again with max_iterations \
-                 {iterations}: {after}, {verdict}",
-                score.failing, first.iterations,
+                "{} after {} iterations, none past {LONGER_SOLVE_WITHIN} times its limit; \
+                 solved again with max_iterations {iterations}: {after}, {verdict}",
+                score.describe(),
+                first.iterations,
             ));
             if kept {
                 best = again;
@@ -1171,6 +1167,15 @@ impl JointScore {
 
     fn better_than(&self, other: &Self) -> bool {
         self.key() < other.key()
+    }
+
+    /// The score in words: `3 joints outside their limits (the worst 1.78 times its limit), 2
+    /// bridges split`.
+    fn describe(&self) -> String {
+        format!(
+            "{} joints outside their limits (the worst {:.2} times its limit), {} bridges split",
+            self.failing, self.worst, self.splits
+        )
     }
 
     /// Joints outside their limits, but none by more than [`LONGER_SOLVE_WITHIN`] times,
