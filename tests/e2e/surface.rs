@@ -57,13 +57,10 @@ fn unmet_goals_still_build_everything_and_exit_3() {
         .collect();
     assert_eq!(warning.len(), 1, "{out:?}");
     assert!(warning[0].contains("exit code 3"), "{out:?}");
-    let report = read_json(&dir.join("o/report.json"));
-    let unmet = report["unmet"].as_array().unwrap();
+    let unmet = unmet_goals(&dir, "o");
     assert!(
-        unmet
-            .iter()
-            .any(|l| l.as_str().unwrap().starts_with("planarity")),
-        "{report}"
+        unmet.iter().any(|l| l.starts_with("planarity")),
+        "{unmet:?}"
     );
     // the 3D view can show where
     let html = std::fs::read_to_string(dir.join("o/report.html")).unwrap();
@@ -175,14 +172,10 @@ fn parts_that_cannot_be_cut_leave_the_mesh_frame_and_report_and_exit_3() {
     let faces = mesh.lines().filter(|l| l.starts_with("f ")).count();
     let frame = read_json(&dir.join("o/frame.json"));
     assert_eq!(frame["units"].as_array().unwrap().len(), faces);
-    let report = read_json(&dir.join("o/report.json"));
+    let unmet = unmet_goals(&dir, "o");
     assert!(
-        report["unmet"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|l| l.as_str().unwrap().starts_with("no strips cut: ")),
-        "{report}"
+        unmet.iter().any(|l| l.starts_with("no strips cut: ")),
+        "{unmet:?}"
     );
     // `check DIR` says where to look; the frame alone can be checked
     let check = dir.run(&["check", "o"]);
@@ -511,13 +504,7 @@ fn automatic_layouts_build_through_to_the_sheets() {
             "3600",
             "--quiet",
         ]);
-        let report = read_json(&dir.join(&format!("{name}/report.json")));
-        let unmet: Vec<String> = report["unmet"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|l| l.as_str().unwrap().to_string())
-            .collect();
+        let unmet = unmet_goals(&dir, name);
         out.expect_code(if unmet.is_empty() { 0 } else { 3 });
         let mesh = std::fs::read_to_string(dir.join(&format!("{name}/mesh.obj"))).unwrap();
         let (faces, boundary, found_loops) = quad_obj_counts(&mesh);
@@ -921,14 +908,11 @@ fn a_joint_solve_that_pulls_the_hub_faces_off_planar_gives_up_early() {
         "2000",
     ]);
     out.expect_code(3);
-    let report = read_json(&dir.join("o/report.json"));
-    let line = report["unmet"]
-        .as_array()
-        .unwrap()
+    let unmet = unmet_goals(&dir, "o");
+    let line = unmet
         .iter()
-        .filter_map(|l| l.as_str())
         .find(|l| l.starts_with("joints not closed: "))
-        .unwrap_or_else(|| panic!("{report}"))
+        .unwrap_or_else(|| panic!("{unmet:?}"))
         .to_string();
     // one reason per direction: (planarity pulled to, started at, iterations)
     let figures: Vec<(f64, f64, usize)> = line

@@ -66,7 +66,9 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String, ReportError> {
         escape(input.generator)
     );
     page.push_str(&summary_section(input, &summary));
-    page.push_str(&frame_section(input));
+    // per unit, the goals not met there: the 3D view's colours, and whether it offers them
+    let goals = goal_flags(input);
+    page.push_str(&frame_section(input, &goals));
     page.push_str(&plots_section(input));
     page.push_str(&sheets_section(input));
     page.push_str(&strips_section(input)?);
@@ -83,7 +85,7 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String, ReportError> {
             ""
         }
     );
-    page.push_str(&scripts(input));
+    page.push_str(&scripts(input, &goals));
     page.push_str("</body>\n</html>\n");
     Ok(page)
 }
@@ -349,9 +351,9 @@ fn quality_table(input: &ReportInput<'_>) -> String {
     h
 }
 
-fn frame_section(input: &ReportInput<'_>) -> String {
+fn frame_section(input: &ReportInput<'_>, goals: &[Vec<String>]) -> String {
     let e = input.frame.params.expansion;
-    let goals_radio = if goal_flags(input).iter().any(|g| !g.is_empty()) {
+    let goals_radio = if goals.iter().any(|g| !g.is_empty()) {
         "\n<label><input type=\"radio\" name=\"colour\" value=\"goals\"> unmet goals</label>"
     } else {
         ""
@@ -617,9 +619,10 @@ fn finite(x: f64) -> Value {
     }
 }
 
-/// The data of the 3D view: units (corners in mm to 0.01, drawing only) and links
-/// `[i, j, gap, overlap]`; the figures the unit panel shows keep their full precision.
-fn view_data(input: &ReportInput<'_>) -> Value {
+/// The data of the 3D view: units (corners in mm to 0.01, drawing only), links
+/// `[i, j, gap, overlap]` and per unit the goals not met there ([`goal_flags`]); the
+/// figures the unit panel shows keep their full precision.
+fn view_data(input: &ReportInput<'_>, goals: &[Vec<String>]) -> Value {
     let pts = |q: &[[f64; 3]; 4]| -> Value {
         Value::Array(
             q.iter()
@@ -651,7 +654,7 @@ fn view_data(input: &ReportInput<'_>) -> Value {
     json!({
         "units": units,
         "links": links,
-        "goals": goal_flags(input),
+        "goals": goals,
         "expansion": input.frame.params.expansion,
         "background": VIEW_BACKGROUND,
         "colour_map": COLOUR_MAP,
@@ -790,8 +793,8 @@ const BOOTSTRAP: &str = "(() => {
 })();
 ";
 
-fn scripts(input: &ReportInput<'_>) -> String {
-    let data = view_data(input).to_string().replace('<', "\\u003c");
+fn scripts(input: &ReportInput<'_>, goals: &[Vec<String>]) -> String {
+    let data = view_data(input, goals).to_string().replace('<', "\\u003c");
     let mut h = format!("<script type=\"application/json\" id=\"sv-data\">{data}</script>\n");
     for m in &sv_viewer::MODULES {
         let _ = writeln!(
