@@ -119,50 +119,46 @@ fn inside_row(p: [Real; 2], straddling: &[([Real; 2], [Real; 2])]) -> bool {
     })
 }
 
-/// The narrowest web between two different slots of a unit near `near`: its centre and
-/// width. `slots` are the unit's slot contours flattened to closed polylines.
-fn narrowest_web(slots: &[Cut], near: Point2, radius: Real) -> Option<(Point2, Real)> {
-    let at = [near.x, near.y];
-    let segments = |c: &Cut| -> Vec<([Real; 2], [Real; 2])> {
-        if c.box_distance(at) > radius {
-            return Vec::new();
-        }
+/// The web of a neck as cut: the narrowest place between the two slots its ends lie on
+/// (`neck`, the layout's ends, pick the slots), within `radius` of its middle; its centre
+/// and width. `slots` are the unit's slot contours flattened to closed polylines. Only
+/// those two slots count: on a small tile a leg's hub neck and the previous leg's rim neck
+/// lie closer than `radius`, between other slots.
+fn neck_web(slots: &[Cut], neck: &[Point2; 2], radius: Real) -> Option<(Point2, Real)> {
+    let slot_at = |p: &Point2| {
+        (0..slots.len()).min_by(|&i, &j| {
+            let d = |c: &Cut| c.distance_below([p.x, p.y], radius);
+            d(&slots[i]).total_cmp(&d(&slots[j]))
+        })
+    };
+    let (a, b) = (slot_at(&neck[0])?, slot_at(&neck[1])?);
+    if a == b {
+        return None;
+    }
+    let mid = (neck[0].coords + neck[1].coords) / 2.0;
+    let at = [mid.x, mid.y];
+    let segments = |c: &Cut| -> Vec<(Point3, Point3)> {
         let s = &c.ring;
         (0..s.len())
             .map(|i| (s[i], s[(i + 1) % s.len()]))
-            .filter(|(a, b)| planar::point_segment_distance(at, *a, *b) <= radius)
+            .filter(|(p, q)| planar::point_segment_distance(at, *p, *q) <= radius)
+            .map(|(p, q)| (Point3::new(p[0], p[1], 0.0), Point3::new(q[0], q[1], 0.0)))
             .collect()
     };
-    let near_slots: Vec<Vec<([Real; 2], [Real; 2])>> = slots
-        .iter()
-        .map(segments)
-        .filter(|s| !s.is_empty())
-        .collect();
+    let (sa, sb) = (segments(&slots[a]), segments(&slots[b]));
     let mut best: Option<(Point2, Real)> = None;
-    for (i, a) in near_slots.iter().enumerate() {
-        for b in &near_slots[i + 1..] {
-            for (a0, a1) in a {
-                for (b0, b1) in b {
-                    let (pa0, pa1) = (
-                        Point3::new(a0[0], a0[1], 0.0),
-                        Point3::new(a1[0], a1[1], 0.0),
-                    );
-                    let (pb0, pb1) = (
-                        Point3::new(b0[0], b0[1], 0.0),
-                        Point3::new(b1[0], b1[1], 0.0),
-                    );
-                    let c = segment_closest(&pa0, &pa1, &pb0, &pb1);
-                    if best.is_some_and(|(_, w)| w <= c.distance) {
-                        continue;
-                    }
-                    let x = pa0 + (pa1 - pa0) * c.s;
-                    let y = pb0 + (pb1 - pb0) * c.t;
-                    best = Some((
-                        Point2::new((x.x + y.x) / 2.0, (x.y + y.y) / 2.0),
-                        c.distance,
-                    ));
-                }
+    for (a0, a1) in &sa {
+        for (b0, b1) in &sb {
+            let c = segment_closest(a0, a1, b0, b1);
+            if best.is_some_and(|(_, w)| w <= c.distance) {
+                continue;
             }
+            let x = a0 + (a1 - a0) * c.s;
+            let y = b0 + (b1 - b0) * c.t;
+            best = Some((
+                Point2::new((x.x + y.x) / 2.0, (x.y + y.y) / 2.0),
+                c.distance,
+            ));
         }
     }
     best
@@ -643,18 +639,17 @@ fn fold_unit(
             slots.len()
         ));
     }
-    let nominal = placed.layout.pins();
     let radius = neck_room(widths);
-    let find = |p: Point2, what: &str| {
-        narrowest_web(&slots, p, radius)
+    let find = |neck: &[Point2; 2], what: &str| {
+        neck_web(&slots, neck, radius)
             .map(|(c, _)| c)
             .ok_or_else(|| format!("no neck in the cut near its {what}"))
     };
     let mut hub_pins = [Point2::origin(); 4];
     let mut rim_pins = [Point2::origin(); 4];
     for k in 0..4 {
-        hub_pins[k] = find(nominal.hub[k], "hub pin")?;
-        rim_pins[k] = find(nominal.rim[k], "rim pin")?;
+        hub_pins[k] = find(&placed.layout.hub_necks[k], "hub pin")?;
+        rim_pins[k] = find(&placed.layout.rim_necks[k], "rim pin")?;
     }
     let hub_world = hub_pins.map(|p| hub * lift(&p));
     let rim_world = rim_pins.map(|p| primary * lift(&p));
@@ -876,6 +871,38 @@ mod tests {
     fn sorted(mut points: Vec<[Real; 2]>) -> Vec<[Real; 2]> {
         points.sort_by(|a, b| a.partial_cmp(b).unwrap());
         points
+    }
+
+    /// A closed rectangle from `lo` to `hi`, as a cut.
+    fn rect(lo: [Real; 2], hi: [Real; 2]) -> Cut {
+        Cut::new(vec![lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]])
+    }
+
+    #[test]
+    fn a_neck_is_the_web_between_its_own_two_slots() {
+        // the neck: 4 mm of web at the origin between slots 0 (below) and 1 (above); 10 mm
+        // to its right slots 2 and 3 leave a narrower web (3 mm), as the previous leg's rim
+        // neck does on a small tile
+        let slots = [
+            rect([-20.0, -5.0], [5.0, -2.0]),
+            rect([-20.0, 2.0], [5.0, 5.0]),
+            rect([8.0, -4.0], [30.0, -1.5]),
+            rect([8.0, 1.5], [30.0, 4.0]),
+        ];
+        let neck = [Point2::new(0.0, -2.0), Point2::new(0.0, 2.0)];
+        let (centre, width) = neck_web(&slots, &neck, 15.0).expect("a web");
+        assert!((width - 4.0).abs() < 1e-9, "width {width}");
+        assert!(
+            centre.y.abs() < 1e-9 && centre.x <= 5.0,
+            "centre {centre:?}"
+        );
+        // the other pair's web is the narrower one within the radius
+        let other = [Point2::new(10.0, -1.5), Point2::new(10.0, 1.5)];
+        let (_, narrower) = neck_web(&slots, &other, 15.0).expect("a web");
+        assert!(narrower < width, "{narrower} against {width}");
+        // both ends on one slot: no neck
+        let astray = [Point2::new(0.0, -2.0), Point2::new(-10.0, -2.0)];
+        assert!(neck_web(&slots, &astray, 15.0).is_none());
     }
 
     #[test]
