@@ -518,6 +518,49 @@ fn failures_are_ours(goal: &str, fig: &Value) {
     assert!(named > 0, "no row we measure is named: {goal}");
 }
 
+/// Each row of `out/report.json`'s fold check that fails lists the units where it does
+/// (the report's 3D view marks them), and where our own fold code (`fig`) names the worst
+/// link of that row, both its units are among them.
+fn failing_rows_list_our_worst(dir: &Dir, out: &str, fig: &Value) {
+    let report = read_json(&dir.join(&format!("{out}/report.json")));
+    let frame = read_json(&dir.join(&format!("{out}/frame.json")));
+    let ids: Vec<&str> = frame["units"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|u| u["id"].as_str().unwrap())
+        .collect();
+    // the rows whose worst link fold_check.py names, and its key for it
+    let worst_of = [
+        ("hub lap as cut", "lap_min"),
+        ("weld: plates of neighbouring strips apart", "weld_gap"),
+        (
+            "plates of neighbouring strips reach into each other",
+            "reach",
+        ),
+    ];
+    let rows = report["fold_check"]["rows"].as_array().expect("fold rows");
+    let mut compared = 0;
+    for row in rows.iter().filter(|r| r["ok"] == false) {
+        let listed: Vec<&str> = row["units"]
+            .as_array()
+            .unwrap_or_else(|| panic!("a failing row lists no units: {row}"))
+            .iter()
+            .map(|u| ids[u.as_u64().unwrap() as usize])
+            .collect();
+        assert!(!listed.is_empty(), "{row}");
+        let name = row["name"].as_str().unwrap();
+        for (_, key) in worst_of.iter().filter(|(p, _)| name.starts_with(p)) {
+            let worst = fig["worst"][key].as_str().expect("our worst link");
+            for id in worst.split('~') {
+                assert!(listed.contains(&id), "{name}: {worst} not in {listed:?}");
+            }
+            compared += 1;
+        }
+    }
+    assert!(compared > 0, "no failing row of ours to compare: {rows:?}");
+}
+
 /// The row of `check`'s table that starts with `name`.
 fn row<'a>(out: &'a crate::util::Output, name: &str) -> &'a str {
     out.stdout
@@ -639,6 +682,7 @@ fn at_200_mm_the_sheet_follows_the_unit_size_and_every_lap_can_be_welded() {
     assert!(f(&fig, "leg_error_max") <= 0.5, "{fig}");
     assert!(f(&fig, "lap_min") >= 25.0, "{fig}");
     failures_are_ours(&unmet[0], &fig);
+    failing_rows_list_our_worst(&dir, "out", &fig);
 
     fs::write(
         dir.join("given.toml"),

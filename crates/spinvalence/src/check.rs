@@ -201,6 +201,7 @@ mod tests {
                     limit: 1e-9,
                     at: "unit A1".into(),
                     ok: true,
+                    units: Vec::new(),
                 },
                 CheckRow {
                     name: "congruence".into(),
@@ -208,6 +209,7 @@ mod tests {
                     limit: 1e-6,
                     at: "unit B7".into(),
                     ok: false,
+                    units: vec![7],
                 },
             ],
         };

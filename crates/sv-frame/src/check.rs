@@ -51,6 +51,11 @@ pub struct CheckRow {
     pub at: String,
     /// Passed?
     pub ok: bool,
+    /// Every unit where a value outside the limit was found (indices into frame.json's
+    /// `units`, ascending): both units of a link, a strip's bridge or a leg reaching into a
+    /// neighbour. Empty where the row holds or names no unit (frame.json's own checks).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub units: Vec<usize>,
 }
 
 impl CheckRow {
@@ -91,6 +96,8 @@ pub struct Worst {
     worst: Option<(Real, String)>,
     /// How many values seen were outside the limit (a NaN counts).
     outside: usize,
+    /// The units those values were found at ([`Worst::see_at`]).
+    units: Vec<usize>,
 }
 
 impl Worst {
@@ -102,6 +109,7 @@ impl Worst {
             at_least: false,
             worst: None,
             outside: 0,
+            units: Vec::new(),
         }
     }
 
@@ -115,12 +123,21 @@ impl Worst {
 
     /// Take `value`, found where `at` says, if it is the worst so far.
     pub fn see(&mut self, value: Real, at: impl FnOnce() -> String) {
+        self.see_at(value, &[], at);
+    }
+
+    /// Take `value`, found at `units` (indices into the frame's units) where `at` says: the
+    /// worst so far, and where it is outside the limit, the units go into the row's list.
+    pub fn see_at(&mut self, value: Real, units: &[usize], at: impl FnOnce() -> String) {
         let within = if self.at_least {
             value >= self.limit
         } else {
             value <= self.limit
         };
         self.outside += usize::from(!within);
+        if !within {
+            self.units.extend_from_slice(units);
+        }
         let worse = match &self.worst {
             None => true,
             Some((w, _)) if w.is_nan() => false,
@@ -146,7 +163,7 @@ impl Worst {
     /// The row: the worst value (none seen: 0 at `-`, or for an at-least check infinity at
     /// `nothing measured`). A held row (finite limit) whose worst is not finite fails: an
     /// at-least check that measured nothing has not shown its values reach the limit.
-    pub fn row(self) -> CheckRow {
+    pub fn row(mut self) -> CheckRow {
         let (worst, at) = self.worst.unwrap_or(if self.at_least {
             (Real::INFINITY, "nothing measured".into())
         } else {
@@ -158,12 +175,15 @@ impl Worst {
             worst <= self.limit
         };
         let ok = within && (worst.is_finite() || self.limit.is_infinite());
+        self.units.sort_unstable();
+        self.units.dedup();
         CheckRow {
             name: self.name.into(),
             worst,
             limit: self.limit,
             at,
             ok,
+            units: if ok { Vec::new() } else { self.units },
         }
     }
 }
@@ -573,6 +593,25 @@ mod tests {
         let mut info = Worst::max("info", Real::INFINITY);
         info.see(Real::INFINITY, || "a".into());
         assert!(info.row().ok);
+    }
+
+    /// A failing row lists every unit where a value was outside its limit, once each and
+    /// in order; a row that holds lists none.
+    #[test]
+    fn a_failing_row_lists_the_units_outside_its_limit() {
+        let mut welds = Worst::max("welds", 1.5);
+        for (v, units) in [(2.0, [7, 3]), (1.0, [1, 2]), (1.6, [3, 5]), (0.2, [9, 0])] {
+            welds.see_at(v, &units, || "link".into());
+        }
+        assert_eq!(welds.row().units, vec![3, 5, 7]);
+        let mut laps = Worst::min("laps", 25.0);
+        laps.see_at(30.0, &[4, 8], || "link".into());
+        laps.see_at(20.0, &[6, 2], || "link".into());
+        assert_eq!(laps.row().units, vec![2, 6]);
+        let mut held = Worst::max("held", 1.5);
+        held.see_at(1.2, &[1, 2], || "link".into());
+        let row = held.row();
+        assert!(row.ok && row.units.is_empty(), "{row:?}");
     }
 
     fn solved_cap() -> FrameFile {

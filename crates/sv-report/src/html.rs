@@ -664,8 +664,8 @@ fn view_data(input: &ReportInput<'_>, goals: &[Vec<String>]) -> Value {
 
 /// Per unit, the goals not met there (empty lists when all hold): the hub mesh's
 /// ([`hub_mesh_flags`]) and, for each row of the fold check that fails on the parts as
-/// cut, the units its worst place names (`link 12 (A06-01 - A07-01)`: both). Empty when
-/// the build met every goal.
+/// cut, every unit where it found a value outside its limit (`CheckRow::units`: both units
+/// of a link). Empty when the build met every goal.
 fn goal_flags(input: &ReportInput<'_>) -> Vec<Vec<String>> {
     let frame = input.frame;
     let mut flags = hub_mesh_flags(input);
@@ -675,18 +675,11 @@ fn goal_flags(input: &ReportInput<'_>) -> Vec<Vec<String>> {
         .flat_map(|fold| &fold.rows)
         .filter(|r| !r.ok);
     for row in failing {
-        let named = row
-            .at
-            .split(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
-            .filter_map(|word| frame.units.iter().position(|u| u.id == word));
-        for u in named {
+        for &u in row.units.iter().filter(|&&u| u < frame.units.len()) {
             if flags.is_empty() {
                 flags = vec![Vec::new(); frame.units.len()];
             }
-            let goal = format!("fold check: {}", row.name);
-            if !flags[u].contains(&goal) {
-                flags[u].push(goal);
-            }
+            flags[u].push(format!("fold check: {}", row.name));
         }
     }
     flags

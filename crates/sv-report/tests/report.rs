@@ -201,6 +201,7 @@ fn the_fold_check_is_shown_with_its_failing_rows_marked() {
         limit,
         at: format!("at {name}"),
         ok,
+        units: Vec::new(),
     };
     let fold = CheckReport {
         rows: vec![
@@ -216,20 +217,28 @@ fn the_fold_check_is_shown_with_its_failing_rows_marked() {
     shown.fold_check = Some(&fold);
     let html = report_html(&shown).unwrap();
     assert!(html.contains("Fold check of the parts as cut"));
-    // a failing row is a goal not met: the 3D view can show it at the units its worst
-    // place names (here none)
+    // a failing row is a goal not met: the 3D view can show it at every unit where it
+    // failed (here none)
     assert!(!html.contains("value=\"goals\""));
     let flag = "[\"fold check: weld: plates apart (mm)\"]";
     assert_eq!(
         html.matches(flag).count(),
         0,
-        "a unit flagged by a place naming none"
+        "a unit flagged by a row naming none"
     );
     let mut named = fold.clone();
-    named.rows[1].at = format!("link 4 ({} - {})", frame.units[2].id, frame.units[6].id);
+    // two open welds (units 2 and 6, 6 and 7), a unit past the frame's units ignored
+    named.rows[1].units = vec![2, 6, 7, frame.units.len()];
+    // a row that holds marks nothing, whatever it lists
+    named.rows[0].units = vec![3];
     shown.fold_check = Some(&named);
     let flagged = report_html(&shown).unwrap();
-    assert_eq!(flagged.matches(flag).count(), 2, "both units of the weld");
+    assert_eq!(
+        flagged.matches(flag).count(),
+        3,
+        "every unit of the open welds"
+    );
+    assert!(!flagged.contains("fold check: leg between its necks"));
     assert!(flagged.contains("value=\"goals\""), "no unmet-goals view");
     shown.fold_check = Some(&fold);
     assert!(html.contains("1 of 3 rows fail"), "verdict missing");

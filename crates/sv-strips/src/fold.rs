@@ -212,7 +212,8 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
     // every unit is cut from exactly one strip
     let mut cover = Worst::max("units in no strip or in more than one", 0.0);
     let astray = crate::file::strips_of_units(&strips.strips, frame.units.len());
-    cover.see(astray.len() as Real, || {
+    let astray_units: Vec<usize> = astray.iter().map(|(u, _)| *u).collect();
+    cover.see_at(astray.len() as Real, &astray_units, || {
         let Some((u, list)) = astray.first() else {
             return "-".into();
         };
@@ -257,22 +258,22 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         match result {
             Ok((f, necks)) => {
                 for (what, err) in necks.pin_offsets {
-                    pins.see(err, || format!("{} {what}", name()));
+                    pins.see_at(err, &[u], || format!("{} {what}", name()));
                 }
                 for (k, err) in necks.leg_errors.iter().enumerate() {
-                    legs.see(*err, || format!("{} leg {k}", name()));
+                    legs.see_at(*err, &[u], || format!("{} leg {k}", name()));
                 }
                 if let Some(hp) = frame.units[u].hub_plate {
                     let off = (0..4)
                         .map(|k| (f.placed.hub_plate[k] - p3(&hp[k])).norm())
                         .fold(0.0, Real::max);
-                    plates.see(off, name);
+                    plates.see_at(off, &[u], name);
                 }
                 folded.insert(u, f);
             }
             Err(why) => {
                 unrebuilt += 1.0;
-                rebuilt.see(unrebuilt, || format!("{}: {why}", name()));
+                rebuilt.see_at(unrebuilt, &[u], || format!("{}: {why}", name()));
             }
         }
     }
@@ -364,34 +365,34 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         };
         let [a, b] = link.units;
         let at = || format!("link {li} ({} - {})", frame.units[a].id, frame.units[b].id);
-        laps.see(m.lap, at);
-        overlaps.see(m.overlap, at);
+        laps.see_at(m.lap, &link.units, at);
+        overlaps.see_at(m.overlap, &link.units, at);
         overlaps_short += usize::from(m.overlap < limits.min_overlap);
         overlaps_none += usize::from(m.overlap <= 0.0);
-        claims.see((m.lap - link.hub_overlap).abs(), at);
+        claims.see_at((m.lap - link.hub_overlap).abs(), &link.units, at);
         if let Some((length, row)) = &mut one_lap {
-            row.see((m.lap - *length).abs(), at);
+            row.see_at((m.lap - *length).abs(), &link.units, at);
         }
         for (depths, under) in &m.legs_through {
             for depth in depths {
-                legs_through.see(*depth, at);
+                legs_through.see_at(*depth, &link.units, at);
             }
             if let Some(under) = under {
-                under_upper.see(*under, at);
+                under_upper.see_at(*under, &link.units, at);
             }
         }
         if let Some((into, widest, closest)) = m.stacking {
-            through.see(into, at);
+            through.see_at(into, &link.units, at);
             stacked.see(widest, at);
-            apart.see(closest, at);
+            apart.see_at(closest, &link.units, at);
             laps_seen += 1;
             laps_apart += usize::from(closest > limits.weld_gap);
         }
         match m.weld {
-            None => rims.see(m.depth, at),
+            None => rims.see_at(m.depth, &link.units, at),
             Some(weld) => {
-                collisions.see(m.depth, at);
-                welds.see(weld, at);
+                collisions.see_at(m.depth, &link.units, at);
+                welds.see_at(weld, &link.units, at);
             }
         }
     }
@@ -422,10 +423,10 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
                 params.neck_width,
                 params.neck_length,
             );
-            span.see(s, at);
-            bend.see(g, at);
+            span.see_at(s, &pin.units, at);
+            bend.see_at(g, &pin.units, at);
             let (_, tw) = hinge_turn(&fa.tile, pin.sides[0], &fb.tile, pin.sides[1]);
-            twist.see(tw.abs().to_degrees(), at);
+            twist.see_at(tw.abs().to_degrees(), &pin.units, at);
         }
     }
     // a leg ends at its tile's corner, where the neighbouring tiles' corners are: the leg as
@@ -467,7 +468,7 @@ pub fn fold_check(frame: &FrameFile, strips: &StripsFile, limits: &FoldLimits) -
         .collect();
     for (&u, depths) in units.iter().zip(reaches) {
         for (k, w, depth) in depths {
-            legs_rims.see(depth, || {
+            legs_rims.see_at(depth, &[u, w], || {
                 format!(
                     "unit {} leg {k} into {}",
                     frame.units[u].id, frame.units[w].id
