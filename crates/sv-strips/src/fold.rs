@@ -11,7 +11,7 @@ use sv_frame::plates::{
     edge_to_plate, facing_reach, hinge_turn, lap_heights, lap_overlap_length, plate_as_cut,
 };
 use sv_frame::{CheckReport, FrameFile, LinkRecord, Worst};
-use sv_geom::{planar, segment_closest, Point2, Point3, Real, Vector3};
+use sv_geom::{planar, segment_closest, Contour, Point2, Point3, Real, Vector3};
 
 use crate::leg_plate::{flat, lift, place, posed_leg, section_in_plate, section_inside, Placed};
 use crate::relief::neck_room;
@@ -121,10 +121,16 @@ fn inside_row(p: [Real; 2], straddling: &[([Real; 2], [Real; 2])]) -> bool {
 
 /// The web of a neck as cut: the narrowest place between the two slots its ends lie on
 /// (`neck`, the layout's ends, pick the slots), within `radius` of its middle; its centre
-/// and width. `slots` are the unit's slot contours flattened to closed polylines. Only
-/// those two slots count: on a small tile a leg's hub neck and the previous leg's rim neck
-/// lie closer than `radius`, between other slots.
-fn neck_web(slots: &[Cut], neck: &[Point2; 2], radius: Real) -> Option<(Point2, Real)> {
+/// and width. `slots` are the unit's slot contours flattened to closed polylines, `fine`
+/// the same flattened finely ([`FINE`]). Only those two slots count: on a small tile a
+/// leg's hub neck and the previous leg's rim neck lie closer than `radius`, between other
+/// slots.
+fn neck_web(
+    slots: &[Cut],
+    fine: &[Vec<[Real; 2]>],
+    neck: &[Point2; 2],
+    radius: Real,
+) -> Option<(Point2, Real)> {
     let slot_at = |p: &Point2| {
         (0..slots.len()).min_by(|&i, &j| {
             let d = |c: &Cut| c.distance_below([p.x, p.y], radius);
@@ -137,28 +143,44 @@ fn neck_web(slots: &[Cut], neck: &[Point2; 2], radius: Real) -> Option<(Point2, 
     }
     let mid = (neck[0].coords + neck[1].coords) / 2.0;
     let at = [mid.x, mid.y];
-    let segments = |c: &Cut| -> Vec<(Point3, Point3)> {
-        let s = &c.ring;
-        (0..s.len())
-            .map(|i| (s[i], s[(i + 1) % s.len()]))
-            .filter(|(p, q)| planar::point_segment_distance(at, *p, *q) <= radius)
-            .map(|(p, q)| (Point3::new(p[0], p[1], 0.0), Point3::new(q[0], q[1], 0.0)))
-            .collect()
-    };
-    let (sa, sb) = (segments(&slots[a]), segments(&slots[b]));
-    let mut best: Option<(Point2, Real)> = None;
-    for (a0, a1) in &sa {
-        for (b0, b1) in &sb {
+    let (x, y, _) = closest(
+        &chords_near(&slots[a].ring, at, radius),
+        &chords_near(&slots[b].ring, at, radius),
+    )?;
+    // the chords leave the narrowest place up to half a chord off along a slot's round
+    // end (0.08 mm at the 0.002 mm the rings are flattened to): found again on the fine
+    // chords near it
+    let (x, y, width) = closest(
+        &chords_near(&fine[a], [x.x, x.y], REFINE),
+        &chords_near(&fine[b], [y.x, y.y], REFINE),
+    )?;
+    Some((Point2::new((x.x + y.x) / 2.0, (x.y + y.y) / 2.0), width))
+}
+
+/// The flattening tolerance of the slots where [`neck_web`] finds a neck again (mm).
+const FINE: Real = 1e-6;
+/// How far from the coarse narrowest place [`neck_web`] looks again (mm).
+const REFINE: Real = 0.5;
+
+/// The chords of the closed polyline `ring` within `within` of `at`, in 3D (z = 0).
+fn chords_near(ring: &[[Real; 2]], at: [Real; 2], within: Real) -> Vec<(Point3, Point3)> {
+    (0..ring.len())
+        .map(|i| (ring[i], ring[(i + 1) % ring.len()]))
+        .filter(|(p, q)| planar::point_segment_distance(at, *p, *q) <= within)
+        .map(|(p, q)| (Point3::new(p[0], p[1], 0.0), Point3::new(q[0], q[1], 0.0)))
+        .collect()
+}
+
+/// The closest two points of the chords `a` and `b` and how far apart they are.
+fn closest(a: &[(Point3, Point3)], b: &[(Point3, Point3)]) -> Option<(Point3, Point3, Real)> {
+    let mut best: Option<(Point3, Point3, Real)> = None;
+    for (a0, a1) in a {
+        for (b0, b1) in b {
             let c = segment_closest(a0, a1, b0, b1);
-            if best.is_some_and(|(_, w)| w <= c.distance) {
+            if best.is_some_and(|(_, _, w)| w <= c.distance) {
                 continue;
             }
-            let x = a0 + (a1 - a0) * c.s;
-            let y = b0 + (b1 - b0) * c.t;
-            best = Some((
-                Point2::new((x.x + y.x) / 2.0, (x.y + y.y) / 2.0),
-                c.distance,
-            ));
+            best = Some((a0 + (a1 - a0) * c.s, b0 + (b1 - b0) * c.t, c.distance));
         }
     }
     best
@@ -627,12 +649,16 @@ fn fold_unit(
     let placed = place(frame, u, &flat, widths)?;
     let (hub, primary) = (placed.hub, placed.primary);
     let unit = &frame.units[u];
-    let slots: Vec<Cut> = strip
+    let contours: Vec<&Contour> = strip
         .cuts
         .iter()
         .zip(&strip.cut_units)
         .filter(|(_, &cu)| cu == u)
-        .map(|(c, _)| Cut::new(c.flatten(0.002)))
+        .map(|(c, _)| c)
+        .collect();
+    let slots: Vec<Cut> = contours
+        .iter()
+        .map(|c| Cut::new(c.flatten(0.002)))
         .collect();
     if slots.len() != 4 {
         return Err(format!(
@@ -641,8 +667,9 @@ fn fold_unit(
         ));
     }
     let radius = neck_room(widths);
+    let fine: Vec<Vec<[Real; 2]>> = contours.iter().map(|c| c.flatten(FINE)).collect();
     let find = |neck: &[Point2; 2], what: &str| {
-        neck_web(&slots, neck, radius)
+        neck_web(&slots, &fine, neck, radius)
             .map(|(c, _)| c)
             .ok_or_else(|| format!("no neck in the cut near its {what}"))
     };
@@ -890,8 +917,9 @@ mod tests {
             rect([8.0, -4.0], [30.0, -1.5]),
             rect([8.0, 1.5], [30.0, 4.0]),
         ];
+        let fine: Vec<Vec<[Real; 2]>> = slots.iter().map(|c| c.ring.clone()).collect();
         let neck = [Point2::new(0.0, -2.0), Point2::new(0.0, 2.0)];
-        let (centre, width) = neck_web(&slots, &neck, 15.0).expect("a web");
+        let (centre, width) = neck_web(&slots, &fine, &neck, 15.0).expect("a web");
         assert!((width - 4.0).abs() < 1e-9, "width {width}");
         assert!(
             centre.y.abs() < 1e-9 && centre.x <= 5.0,
@@ -899,11 +927,39 @@ mod tests {
         );
         // the other pair's web is the narrower one within the radius
         let other = [Point2::new(10.0, -1.5), Point2::new(10.0, 1.5)];
-        let (_, narrower) = neck_web(&slots, &other, 15.0).expect("a web");
+        let (_, narrower) = neck_web(&slots, &fine, &other, 15.0).expect("a web");
         assert!(narrower < width, "{narrower} against {width}");
         // both ends on one slot: no neck
         let astray = [Point2::new(0.0, -2.0), Point2::new(-10.0, -2.0)];
-        assert!(neck_web(&slots, &astray, 15.0).is_none());
+        assert!(neck_web(&slots, &fine, &astray, 15.0).is_none());
+    }
+
+    #[test]
+    fn a_neck_off_a_round_slot_end_is_found_to_a_few_micrometres() {
+        use sv_geom::{Vector2, Vertex};
+        // slot 0 ends in a half circle round the origin (radius 1.5), slot 1's side is the
+        // line x = 5: the web is narrowest on the x axis, 3.5 mm wide, where the flattened
+        // end has a chord parallel to that side (31 chords at 0.002 mm, 0.15 mm long)
+        let end = Contour::new(vec![
+            Vertex::line(-20.0, -1.5),
+            Vertex::new(0.0, -1.5, 1.0),
+            Vertex::line(0.0, 1.5),
+            Vertex::new(-20.0, 1.5, 1.0),
+        ]);
+        let side = vec![[5.0, -10.0], [9.0, -10.0], [9.0, 10.0], [5.0, 10.0]];
+        let slots = [Cut::new(end.flatten(0.002)), Cut::new(side.clone())];
+        let fine = [end.flatten(FINE), side];
+        let centre = Vector2::new(3.25, 0.0);
+        let neck = [Point2::new(1.5, 0.0), Point2::new(4.8, 0.0)];
+        let (found, width) = neck_web(&slots, &fine, &neck, 15.0).expect("a web");
+        assert!((width - 3.5).abs() < 1e-6, "width {width}");
+        let off = (found.coords - centre).norm();
+        assert!(off < 2e-3, "{off} mm from the narrowest place");
+        // on the chords alone it is further off
+        let coarse = [slots[0].ring.clone(), slots[1].ring.clone()];
+        let (rough, _) = neck_web(&slots, &coarse, &neck, 15.0).expect("a web");
+        let rough = (rough.coords - centre).norm();
+        assert!(rough > 0.05 && rough > 10.0 * off, "{rough} against {off}");
     }
 
     #[test]
