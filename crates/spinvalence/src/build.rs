@@ -124,7 +124,7 @@ pub fn resolve(args: &BuildArgs) -> Result<(BuildConfig, StageOptions)> {
     }
     // a hub lap asked for must be one the welds take
     cfg.frame
-        .overlap_target(&[], cfg.primary.min_overlap(&cfg.profile)?)?;
+        .overlap_targets(&[], cfg.primary.min_overlap(&cfg.profile)?)?;
     let mut solve = cfg.primary.to_solve_options()?;
     let strips = cfg.strips.to_options()?;
     cfg.profile
@@ -567,9 +567,9 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
     // where the solve itself fails in every direction (a hub mesh far from its goals can
     // shrink a tile below its cut), the primary solve's frame is kept with the joints open
     let mut joints_failed = None;
-    let mut longer_solve = None;
+    let mut joint_notes = Vec::new();
     let (mesh, solved, joints) = if cfg.joints.close && options.unweldable.is_none() {
-        let (closed, longer) = close_the_joints(
+        let (closed, notes) = close_the_joints(
             args,
             &mut cfg,
             &mut options,
@@ -578,7 +578,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
             &mut report,
             min_overlap,
         )?;
-        longer_solve = longer;
+        joint_notes = notes;
         match closed {
             Ok((mesh, solved, joint_report)) => (mesh, solved, Some(joint_report)),
             Err(why) => {
@@ -625,9 +625,7 @@ pub fn run(args: &BuildArgs) -> Result<Outcome> {
                     tried_both,
                     HeldLaps::of(cfg.frame.overlap),
                 ));
-                if let Some(longer) = &longer_solve {
-                    joint.push(vec!["longer solve".into(), longer.clone()]);
-                }
+                joint.extend(joint_notes.iter().cloned());
                 joint
             }
             None if cfg.joints.close => vec![vec![
@@ -946,6 +944,8 @@ type Closed = (sv_frame::QuadMesh, sv_frame::Solved, sv_frame::JointReport);
 /// One strip direction's joint solve: how well its joints hold, the direction and the
 /// frame, or why it failed.
 type Attempt = std::result::Result<Kept, String>;
+/// Rows of the summary table: a name and its text.
+type SummaryRows = Vec<Vec<String>>;
 /// A strip direction's joint solve that could be kept: its score, direction and frame.
 type Kept = (JointScore, sv_strips::StripDirection, Closed);
 
@@ -957,9 +957,11 @@ const LONGER_SOLVE_WITHIN: f64 = 2.0;
 
 /// The joint solve of a build (`[joints] close`): the hub mesh and every unit's plates
 /// moved together so that the parts as cut meet, in the strips' direction the command line
-/// names or, unless it does, in the better of both. The strips' direction goes into `cfg`
-/// and `options`; `report` is measured again on the moved hub mesh. The inner error says
-/// why the solve failed in every direction tried (the outer one is the configuration's).
+/// names or, unless it does, in the better of both; with the hub laps held to one length,
+/// each length of `[frame] overlap` in turn until every joint holds. The strips' direction
+/// goes into `cfg` and `options`; `report` is measured again on the moved hub mesh. The
+/// inner error says why the solve failed in every direction tried (the outer one is the
+/// configuration's); the rows are the summary's (the lengths tried, the longer solve).
 fn close_the_joints(
     args: &BuildArgs,
     cfg: &mut BuildConfig,
@@ -968,21 +970,20 @@ fn close_the_joints(
     (mesh, solved): (&sv_frame::QuadMesh, &sv_frame::Solved),
     report: &mut SecondaryReport,
     min_overlap: f64,
-) -> Result<(std::result::Result<Closed, String>, Option<String>)> {
+) -> Result<(std::result::Result<Closed, String>, SummaryRows)> {
     let frame0 = solved.to_frame_file(mesh);
     let surface =
         sv_surface::TargetSurface::new(target, mesh).map_err(|e| anyhow!("{}: {e}", cfg.target))?;
     let p = &cfg.profile;
-    let overlap = cfg
+    let laps = cfg
         .frame
-        .overlap_target(&solved.evaluation.overlaps, min_overlap)?;
+        .overlap_targets(&solved.evaluation.overlaps, min_overlap)?;
     let (short, long) = sv_surface::Goals::default().side_range;
     let unit = cfg.secondary.unit_size;
     let joint_options = sv_frame::JointOptions {
         max_iterations: cfg.joints.max_iterations,
         split_iterations: cfg.joints.split_iterations,
         min_overlap,
-        overlap,
         face_sides: Some((short * unit, long * unit)),
         laps_touch: cfg.frame.laps_touch,
         limits: p.joint_limits(),
@@ -1002,52 +1003,58 @@ fn close_the_joints(
     // the directions are solved side by side (each is deterministic on its own; the
     // best is chosen in the order above), their bars drawn together
     let bars = indicatif::MultiProgress::new();
-    let solve_in =
-        |direction: sv_strips::StripDirection, max_iterations: usize| -> Result<Attempt> {
-            let strip_options = sv_strips::StripOptions {
-                direction,
-                ..options.strips.clone()
-            };
-            let plan = sv_strips::strip_plan(&frame0, &strip_options)
-                .map_err(|e| anyhow!("{}: strips: {e}", cfg.target))?;
-            let joint_options = sv_frame::JointOptions {
-                pieces: plan.pieces,
-                max_iterations,
-                ..joint_options.clone()
-            };
-            let what = format!("joints, strips along {}", direction_name(direction));
-            let bar = progress_bar(args.quiet, joint_options.max_iterations, &what);
-            let bar = if bar.is_hidden() { bar } else { bars.add(bar) };
-            let closed = sv_frame::close_joints(
-                mesh,
-                solved,
-                &surface,
-                &plan.bridges,
-                &joint_options,
-                &mut |it, energy| {
-                    // rounds after bridges are split run past the planned iterations
-                    if it as u64 > bar.length().unwrap_or(0) {
-                        bar.set_length((it + joint_options.split_iterations) as u64);
-                    }
-                    bar.set_position(it as u64);
-                    bar.set_message(format!("residual {energy:.3e}"));
-                },
-            );
-            finish(&bar);
-            Ok(match closed {
-                Ok(closed) => {
-                    let score = JointScore::of(&closed, &joint_options.limits, min_overlap);
-                    Ok((score, direction, closed))
-                }
-                Err(e) => Err(format!("strips along {}: {e}", direction_name(direction))),
-            })
+    let solve_in = |direction: sv_strips::StripDirection,
+                    max_iterations: usize,
+                    overlap: Option<sv_frame::LapGoal>|
+     -> Result<Attempt> {
+        let strip_options = sv_strips::StripOptions {
+            direction,
+            ..options.strips.clone()
         };
-    // the best of every direction tried with `max_iterations`: the first kept where both
-    // hold as well; where none could be solved, why, for each
-    let best_of = |max_iterations: usize| -> Result<std::result::Result<Kept, Vec<String>>> {
+        let plan = sv_strips::strip_plan(&frame0, &strip_options)
+            .map_err(|e| anyhow!("{}: strips: {e}", cfg.target))?;
+        let joint_options = sv_frame::JointOptions {
+            pieces: plan.pieces,
+            max_iterations,
+            overlap,
+            ..joint_options.clone()
+        };
+        let what = format!("joints, strips along {}", direction_name(direction));
+        let bar = progress_bar(args.quiet, joint_options.max_iterations, &what);
+        let bar = if bar.is_hidden() { bar } else { bars.add(bar) };
+        let closed = sv_frame::close_joints(
+            mesh,
+            solved,
+            &surface,
+            &plan.bridges,
+            &joint_options,
+            &mut |it, energy| {
+                // rounds after bridges are split run past the planned iterations
+                if it as u64 > bar.length().unwrap_or(0) {
+                    bar.set_length((it + joint_options.split_iterations) as u64);
+                }
+                bar.set_position(it as u64);
+                bar.set_message(format!("residual {energy:.3e}"));
+            },
+        );
+        finish(&bar);
+        Ok(match closed {
+            Ok(closed) => {
+                let score = JointScore::of(&closed, &joint_options.limits, min_overlap);
+                Ok((score, direction, closed))
+            }
+            Err(e) => Err(format!("strips along {}: {e}", direction_name(direction))),
+        })
+    };
+    // the best of every direction tried with `max_iterations` and the hub laps held to
+    // `overlap`: the first kept where both hold as well; where none could be solved, why,
+    // for each
+    let best_of = |max_iterations: usize,
+                   overlap: Option<sv_frame::LapGoal>|
+     -> Result<std::result::Result<Kept, Vec<String>>> {
         let attempts: Vec<Result<Attempt>> = directions
             .par_iter()
-            .map(|&direction| solve_in(direction, max_iterations))
+            .map(|&direction| solve_in(direction, max_iterations, overlap))
             .collect();
         let mut best: Option<Kept> = None;
         let mut failed = Vec::new();
@@ -1063,14 +1070,67 @@ fn close_the_joints(
         }
         Ok(best.ok_or(failed))
     };
-    let mut best = best_of(cfg.joints.max_iterations)?;
+    // the hub laps held to one length: each length in turn until every joint holds, the
+    // best kept (free laps: one solve)
+    let mut notes = Vec::new();
+    let goals: Vec<Option<sv_frame::LapGoal>> = if laps.is_empty() {
+        vec![None]
+    } else {
+        laps.into_iter().map(Some).collect()
+    };
+    let mut best: std::result::Result<Kept, Vec<String>> = Err(Vec::new());
+    let mut tried = Vec::new();
+    for goal in &goals {
+        let attempt = best_of(cfg.joints.max_iterations, *goal)?;
+        let holds = matches!(&attempt, Ok((s, _, _)) if s.holds());
+        if let Some(goal) = goal {
+            tried.push(format!(
+                "{} mm: {}",
+                number(goal.length),
+                match &attempt {
+                    Ok((s, d, _)) =>
+                        format!("{} (strips along {})", s.describe(), direction_name(*d)),
+                    Err(why) => format!("failed ({})", why.join("; ")),
+                }
+            ));
+        }
+        best = match (best, attempt) {
+            (Ok(b), Ok(a)) if a.0.better_than(&b.0) => Ok(a),
+            (Ok(b), _) => Ok(b),
+            (Err(_), Ok(a)) => Ok(a),
+            (Err(mut why), Err(more)) => {
+                why.extend(more);
+                Err(why)
+            }
+        };
+        if holds {
+            break;
+        }
+    }
+    if goals.len() > 1 {
+        let kept = match &best {
+            Ok((_, _, (_, solved, _))) => solved
+                .joints
+                .as_ref()
+                .and_then(|j| j.hub_lap)
+                .map_or("none".into(), |g| format!("{} mm", number(g.length))),
+            Err(_) => "none".into(),
+        };
+        notes.push(vec![
+            "hub lap lengths".into(),
+            format!(
+                "tried until every joint holds: {}; kept {kept}",
+                tried.join("; ")
+            ),
+        ]);
+    }
     // joints left just outside their limits: every direction once more with twice the
-    // iterations, kept where it holds better
-    let mut longer = None;
-    if let Ok((score, _, (_, _, first))) = &best {
+    // iterations (the laps held to the kept length), kept where it holds better
+    if let Ok((score, _, (_, first_solved, first))) = &best {
         if cfg.joints.longer_solve && score.nearly_holds() {
             let iterations = 2 * cfg.joints.max_iterations;
-            let again = best_of(iterations)?;
+            let overlap = first_solved.joints.as_ref().and_then(|j| j.hub_lap);
+            let again = best_of(iterations, overlap)?;
             let (after, kept) = match &again {
                 Ok((s, d, _)) => (
                     format!("{} (strips along {})", s.describe(), direction_name(*d)),
@@ -1083,12 +1143,15 @@ fn close_the_joints(
             } else {
                 "not kept (it held no better)"
             };
-            longer = Some(format!(
-                "{} after {} iterations, none past {LONGER_SOLVE_WITHIN} times its limit; \
-                 solved again with max_iterations {iterations}: {after}, {verdict}",
-                score.describe(),
-                first.iterations,
-            ));
+            notes.push(vec![
+                "longer solve".into(),
+                format!(
+                    "{} after {} iterations, none past {LONGER_SOLVE_WITHIN} times its limit; \
+                     solved again with max_iterations {iterations}: {after}, {verdict}",
+                    score.describe(),
+                    first.iterations,
+                ),
+            ]);
             if kept {
                 best = again;
             }
@@ -1096,7 +1159,7 @@ fn close_the_joints(
     }
     let (_, direction, (mesh, solved, joint_report)) = match best {
         Ok(kept) => kept,
-        Err(failed) => return Ok((Err(failed.join("; ")), longer)),
+        Err(failed) => return Ok((Err(failed.join("; ")), notes)),
     };
     // the hub mesh moved: its goals are measured again (conicality, the paper's stand-in
     // for tiles that can meet, is not held where the joints themselves are closed)
@@ -1108,7 +1171,7 @@ fn close_the_joints(
     again.iterations = report.iterations;
     again.layout = std::mem::take(&mut report.layout);
     *report = again;
-    Ok((Ok((mesh, solved, joint_report)), longer))
+    Ok((Ok((mesh, solved, joint_report)), notes))
 }
 
 fn direction_name(d: sv_strips::StripDirection) -> &'static str {
@@ -1176,6 +1239,11 @@ impl JointScore {
             "{} joints outside their limits (the worst {:.2} times its limit), {} bridges split",
             self.failing, self.worst, self.splits
         )
+    }
+
+    /// Every joint within its limits and every hub lap long enough to weld.
+    fn holds(&self) -> bool {
+        self.short_laps == 0 && self.failing == 0
     }
 
     /// Joints outside their limits, but none by more than [`LONGER_SOLVE_WITHIN`] times,

@@ -227,8 +227,8 @@ impl Default for BuildConfig {
 #[serde(default, deny_unknown_fields)]
 pub struct FrameConfig {
     /// The hub laps: `"free"` (any length above the weld minimum), `"constant"` (one length
-    /// for every link, the primary solve's median lap or the weld minimum, whichever is
-    /// longer: one gauge block checks every hub joint on site) or that length in mm.
+    /// for every link, chosen by the build: one gauge block checks every hub joint on site;
+    /// [`FrameConfig::overlap_targets`]) or that length in mm.
     pub overlap: Overlap,
     /// How far a hub lap may be from that one length, either way (mm).
     pub overlap_tolerance: f64,
@@ -291,10 +291,39 @@ pub enum OverlapRule {
     Constant,
 }
 
+/// With `[frame] overlap = "constant"`, how many lengths the joint solve tries in turn
+/// until every joint holds ([`FrameConfig::overlap_targets`]).
+pub const LAP_LENGTHS: usize = 4;
+
 impl FrameConfig {
+    /// The hub laps the joint solve tries in turn, the first whose joints all hold kept:
+    /// none where the laps are free, the length asked for, or with `"constant"` the
+    /// primary solve's median lap (at least the weld minimum and the tolerance) and then
+    /// [`LAP_LENGTHS`] - 1 longer ones, each two bands (4 x `overlap_tolerance`) past the
+    /// last. Which length lets every joint close is not the median's to say, nor any one
+    /// rule's: measured 2026-12-08 at 300 mm (docs/geometry.md 6.9), the pavilion closes at
+    /// its median + 4 mm (53.1 mm) and not at its median or at 56 mm, the vault at its
+    /// median + 8 mm (56.0 mm), the dome at its median + 12 mm (56.7 mm) but not at + 4 or
+    /// + 8 mm.
+    pub fn overlap_targets(&self, laps: &[f64], min_overlap: f64) -> Result<Vec<LapGoal>> {
+        let Some(first) = self.overlap_target(laps, min_overlap)? else {
+            return Ok(Vec::new());
+        };
+        let tries = match self.overlap {
+            Overlap::Rule(OverlapRule::Constant) => LAP_LENGTHS,
+            _ => 1,
+        };
+        Ok((0..tries)
+            .map(|k| LapGoal {
+                length: first.length + 4.0 * first.tolerance * k as f64,
+                ..first
+            })
+            .collect())
+    }
+
     /// The one hub lap every link must have, if any: `laps` are the primary solve's. Errors
     /// when the tolerance is not a positive length or the band reaches below the weld minimum.
-    pub fn overlap_target(&self, laps: &[f64], min_overlap: f64) -> Result<Option<LapGoal>> {
+    fn overlap_target(&self, laps: &[f64], min_overlap: f64) -> Result<Option<LapGoal>> {
         let tolerance = self.overlap_tolerance;
         if !(tolerance.is_finite() && tolerance > 0.0) {
             bail!(
@@ -527,6 +556,31 @@ mod tests {
     /// [`read`]'s parameters alone.
     fn parse(text: &str, name: &str) -> Result<BuildConfig> {
         read(text, name).map(|file| file.config)
+    }
+
+    /// Free laps: no length; a length asked: that one; `"constant"`: the median lap (at
+    /// least the weld minimum and the tolerance) and three more, each two bands longer.
+    #[test]
+    fn the_lap_lengths_tried_follow_the_overlap_asked() {
+        let laps = [40.0, 52.0, 47.0, 61.0, 30.0];
+        let frame = |overlap: &str| parse(&format!("[frame]\noverlap = {overlap}\n"), "c.toml");
+        let free = frame("\"free\"").unwrap().frame;
+        assert!(free.overlap_targets(&laps, 25.0).unwrap().is_empty());
+        let asked = frame("50.0")
+            .unwrap()
+            .frame
+            .overlap_targets(&laps, 25.0)
+            .unwrap();
+        assert_eq!(asked.iter().map(|g| g.length).collect::<Vec<_>>(), [50.0]);
+        let constant = frame("\"constant\"").unwrap().frame;
+        let lengths = |laps: &[f64]| -> Vec<f64> {
+            let goals = constant.overlap_targets(laps, 25.0).unwrap();
+            assert!(goals.iter().all(|g| g.tolerance == 1.0));
+            goals.iter().map(|g| g.length).collect()
+        };
+        assert_eq!(lengths(&laps), [47.0, 51.0, 55.0, 59.0]);
+        // laps shorter than the weld minimum and its band start from there
+        assert_eq!(lengths(&[10.0, 12.0]), [26.0, 30.0, 34.0, 38.0]);
     }
 
     #[test]
