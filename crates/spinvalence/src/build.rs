@@ -1019,7 +1019,10 @@ fn close_the_joints(
             overlap,
             ..joint_options.clone()
         };
-        let what = format!("joints, strips along {}", direction_name(direction));
+        let mut what = format!("joints, strips along {}", direction_name(direction));
+        if let Some(goal) = &overlap {
+            what.push_str(&format!(", laps {} mm", number(goal.length)));
+        }
         let bar = progress_bar(args.quiet, joint_options.max_iterations, &what);
         let bar = if bar.is_hidden() { bar } else { bars.add(bar) };
         let closed = sv_frame::close_joints(
