@@ -27,8 +27,8 @@
 
 use cavalier_contours::core::math::Vector2 as CVector2;
 use cavalier_contours::polyline::{
-    seg_arc_radius_and_center, seg_length, seg_midpoint, PlineCreation, PlineSource, PlineVertex,
-    Polyline,
+    seg_arc_radius_and_center, seg_closest_point, seg_length, seg_midpoint, PlineCreation,
+    PlineSource, PlineVertex, Polyline,
 };
 use serde::{Deserialize, Serialize};
 
@@ -125,6 +125,12 @@ impl Segment {
         } else {
             self.chord()
         }
+    }
+
+    /// The point of the segment nearest `p` (on the arc for an arc).
+    pub fn closest_point(&self, p: [f64; 2]) -> [f64; 2] {
+        let q = seg_closest_point(self.v1(), self.v2(), CVector2::new(p[0], p[1]), BULGE_EPS);
+        [q.x, q.y]
     }
 
     /// The point halfway along the segment (on the arc for an arc).

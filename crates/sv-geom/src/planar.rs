@@ -26,6 +26,11 @@ pub fn orientation(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i8 {
     }
 }
 
+/// Distance from `p` to `q`.
+pub fn distance(p: [f64; 2], q: [f64; 2]) -> f64 {
+    (p[0] - q[0]).hypot(p[1] - q[1])
+}
+
 /// Distance from `p` to the segment `ab`.
 pub fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     point_segment_distance2(p, a, b).sqrt()

@@ -11,7 +11,7 @@ use sv_frame::plates::{
     edge_to_plate, facing_reach, hinge_turn, lap_heights, lap_overlap_length, plate_as_cut,
 };
 use sv_frame::{CheckReport, FrameFile, LinkRecord, Worst};
-use sv_geom::{planar, segment_closest, Contour, Point2, Point3, Real, Vector3};
+use sv_geom::{planar, segment_closest, Contour, Point2, Point3, Real, Segment, Vector3};
 
 use crate::leg_plate::{flat, lift, place, posed_leg, section_in_plate, section_inside, Placed};
 use crate::relief::neck_room;
@@ -121,13 +121,13 @@ fn inside_row(p: [Real; 2], straddling: &[([Real; 2], [Real; 2])]) -> bool {
 
 /// The web of a neck as cut: the narrowest place between the two slots its ends lie on
 /// (`neck`, the layout's ends, pick the slots), within `radius` of its middle; its centre
-/// and width. `slots` are the unit's slot contours flattened to closed polylines, `fine`
-/// the same flattened finely ([`FINE`]). Only those two slots count: on a small tile a
-/// leg's hub neck and the previous leg's rim neck lie closer than `radius`, between other
-/// slots.
+/// and width. `slots` are the unit's slot contours flattened to closed polylines,
+/// `contours` the slots themselves, on whose lines and arcs the find is made exact. Only
+/// those two slots count: on a small tile a leg's hub neck and the previous leg's rim neck
+/// lie closer than `radius`, between other slots.
 fn neck_web(
     slots: &[Cut],
-    fine: &[Vec<[Real; 2]>],
+    contours: &[&Contour],
     neck: &[Point2; 2],
     radius: Real,
 ) -> Option<(Point2, Real)> {
@@ -148,19 +148,50 @@ fn neck_web(
         &chords_near(&slots[b].ring, at, radius),
     )?;
     // the chords leave the narrowest place up to half a chord off along a slot's round
-    // end (0.08 mm at the 0.002 mm the rings are flattened to): found again on the fine
-    // chords near it
-    let (x, y, width) = closest(
-        &chords_near(&fine[a], [x.x, x.y], REFINE),
-        &chords_near(&fine[b], [y.x, y.y], REFINE),
-    )?;
-    Some((Point2::new((x.x + y.x) / 2.0, (x.y + y.y) / 2.0), width))
+    // end (0.08 mm at the 0.002 mm the rings are flattened to): from there, the nearest
+    // point of one slot's true lines and arcs to the other's in turn
+    let (sa, sb) = (
+        segments_near(contours[a], [x.x, x.y], REFINE),
+        segments_near(contours[b], [y.x, y.y], REFINE),
+    );
+    let (mut x, mut y) = ([x.x, x.y], [y.x, y.y]);
+    for _ in 0..REFINE_STEPS {
+        let x1 = nearest_on(&sa, y)?;
+        let y1 = nearest_on(&sb, x1)?;
+        let moved = planar::distance(x, x1) + planar::distance(y, y1);
+        (x, y) = (x1, y1);
+        if moved < 1e-9 {
+            break;
+        }
+    }
+    Some((
+        Point2::new((x[0] + y[0]) / 2.0, (x[1] + y[1]) / 2.0),
+        planar::distance(x, y),
+    ))
 }
 
-/// The flattening tolerance of the slots where [`neck_web`] finds a neck again (mm).
-const FINE: Real = 1e-6;
-/// How far from the coarse narrowest place [`neck_web`] looks again (mm).
+/// How far from the first find [`neck_web`] looks for the slots' lines and arcs (mm).
 const REFINE: Real = 0.5;
+/// At most this many turns of [`neck_web`]'s nearest points (each narrows the error by
+/// about the slot's end radius over the web's width: a few turns reach 1e-9 mm).
+const REFINE_STEPS: usize = 50;
+
+/// The segments (lines and arcs) of `contour` that come within `within` of `at` (every
+/// point of a segment lies within half its length of its midpoint).
+fn segments_near(contour: &Contour, at: [Real; 2], within: Real) -> Vec<Segment> {
+    contour
+        .segments()
+        .filter(|s| planar::distance(s.midpoint(), at) <= within + s.length() / 2.0)
+        .collect()
+}
+
+/// The point of `segments` nearest `p`.
+fn nearest_on(segments: &[Segment], p: [Real; 2]) -> Option<[Real; 2]> {
+    segments
+        .iter()
+        .map(|s| s.closest_point(p))
+        .min_by(|q, r| planar::distance(*q, p).total_cmp(&planar::distance(*r, p)))
+}
 
 /// The chords of the closed polyline `ring` within `within` of `at`, in 3D (z = 0).
 fn chords_near(ring: &[[Real; 2]], at: [Real; 2], within: Real) -> Vec<(Point3, Point3)> {
@@ -667,9 +698,8 @@ fn fold_unit(
         ));
     }
     let radius = neck_room(widths);
-    let fine: Vec<Vec<[Real; 2]>> = contours.iter().map(|c| c.flatten(FINE)).collect();
     let find = |neck: &[Point2; 2], what: &str| {
-        neck_web(&slots, &fine, neck, radius)
+        neck_web(&slots, &contours, neck, radius)
             .map(|(c, _)| c)
             .ok_or_else(|| format!("no neck in the cut near its {what}"))
     };
@@ -902,8 +932,22 @@ mod tests {
     }
 
     /// A closed rectangle from `lo` to `hi`, as a cut.
-    fn rect(lo: [Real; 2], hi: [Real; 2]) -> Cut {
-        Cut::new(vec![lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]])
+    fn rect(lo: [Real; 2], hi: [Real; 2]) -> Contour {
+        use sv_geom::Vertex;
+        Contour::new(vec![
+            Vertex::line(lo[0], lo[1]),
+            Vertex::line(hi[0], lo[1]),
+            Vertex::line(hi[0], hi[1]),
+            Vertex::line(lo[0], hi[1]),
+        ])
+    }
+
+    /// The slots flattened as the fold check flattens them.
+    fn cuts(contours: &[&Contour]) -> Vec<Cut> {
+        contours
+            .iter()
+            .map(|c| Cut::new(c.flatten(0.002)))
+            .collect()
     }
 
     #[test]
@@ -911,15 +955,17 @@ mod tests {
         // the neck: 4 mm of web at the origin between slots 0 (below) and 1 (above); 10 mm
         // to its right slots 2 and 3 leave a narrower web (3 mm), as the previous leg's rim
         // neck does on a small tile
-        let slots = [
+        let contours = [
             rect([-20.0, -5.0], [5.0, -2.0]),
             rect([-20.0, 2.0], [5.0, 5.0]),
             rect([8.0, -4.0], [30.0, -1.5]),
             rect([8.0, 1.5], [30.0, 4.0]),
         ];
-        let fine: Vec<Vec<[Real; 2]>> = slots.iter().map(|c| c.ring.clone()).collect();
+        let contours: Vec<&Contour> = contours.iter().collect();
+        let slots = cuts(&contours);
+        let web = |neck: &[Point2; 2]| neck_web(&slots, &contours, neck, 15.0);
         let neck = [Point2::new(0.0, -2.0), Point2::new(0.0, 2.0)];
-        let (centre, width) = neck_web(&slots, &fine, &neck, 15.0).expect("a web");
+        let (centre, width) = web(&neck).expect("a web");
         assert!((width - 4.0).abs() < 1e-9, "width {width}");
         assert!(
             centre.y.abs() < 1e-9 && centre.x <= 5.0,
@@ -927,15 +973,15 @@ mod tests {
         );
         // the other pair's web is the narrower one within the radius
         let other = [Point2::new(10.0, -1.5), Point2::new(10.0, 1.5)];
-        let (_, narrower) = neck_web(&slots, &fine, &other, 15.0).expect("a web");
+        let (_, narrower) = web(&other).expect("a web");
         assert!(narrower < width, "{narrower} against {width}");
         // both ends on one slot: no neck
         let astray = [Point2::new(0.0, -2.0), Point2::new(-10.0, -2.0)];
-        assert!(neck_web(&slots, &fine, &astray, 15.0).is_none());
+        assert!(web(&astray).is_none());
     }
 
     #[test]
-    fn a_neck_off_a_round_slot_end_is_found_to_a_few_micrometres() {
+    fn a_neck_off_a_round_slot_end_is_found_on_its_arc() {
         use sv_geom::{Vector2, Vertex};
         // slot 0 ends in a half circle round the origin (radius 1.5), slot 1's side is the
         // line x = 5: the web is narrowest on the x axis, 3.5 mm wide, where the flattened
@@ -946,20 +992,24 @@ mod tests {
             Vertex::line(0.0, 1.5),
             Vertex::new(-20.0, 1.5, 1.0),
         ]);
-        let side = vec![[5.0, -10.0], [9.0, -10.0], [9.0, 10.0], [5.0, 10.0]];
-        let slots = [Cut::new(end.flatten(0.002)), Cut::new(side.clone())];
-        let fine = [end.flatten(FINE), side];
+        let side = rect([5.0, -10.0], [9.0, 10.0]);
+        let contours = [&end, &side];
+        let slots = cuts(&contours);
         let centre = Vector2::new(3.25, 0.0);
         let neck = [Point2::new(1.5, 0.0), Point2::new(4.8, 0.0)];
-        let (found, width) = neck_web(&slots, &fine, &neck, 15.0).expect("a web");
+        let (found, width) = neck_web(&slots, &contours, &neck, 15.0).expect("a web");
         assert!((width - 3.5).abs() < 1e-6, "width {width}");
         let off = (found.coords - centre).norm();
-        assert!(off < 2e-3, "{off} mm from the narrowest place");
+        assert!(off < 1e-6, "{off} mm from the narrowest place");
         // on the chords alone it is further off
-        let coarse = [slots[0].ring.clone(), slots[1].ring.clone()];
-        let (rough, _) = neck_web(&slots, &coarse, &neck, 15.0).expect("a web");
-        let rough = (rough.coords - centre).norm();
-        assert!(rough > 0.05 && rough > 10.0 * off, "{rough} against {off}");
+        let at = [3.15, 0.0];
+        let (x, y, _) = closest(
+            &chords_near(&slots[0].ring, at, 15.0),
+            &chords_near(&slots[1].ring, at, 15.0),
+        )
+        .unwrap();
+        let rough = ((x.coords + y.coords) / 2.0).xy() - centre;
+        assert!(rough.norm() > 0.05, "{rough:?}");
     }
 
     #[test]
