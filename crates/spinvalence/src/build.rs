@@ -1087,15 +1087,7 @@ fn close_the_joints(
         let attempt = best_of(cfg.joints.max_iterations, *goal)?;
         let holds = matches!(&attempt, Ok((s, _, _)) if s.holds());
         if let Some(goal) = goal {
-            tried.push(format!(
-                "{} mm: {}",
-                number(goal.length),
-                match &attempt {
-                    Ok((s, d, _)) =>
-                        format!("{} (strips along {})", s.describe(), direction_name(*d)),
-                    Err(why) => format!("failed ({})", why.join("; ")),
-                }
-            ));
+            tried.push(format!("{} mm: {}", number(goal.length), outcome(&attempt)));
         }
         best = match (best, attempt) {
             (Ok(b), Ok(a)) if a.0.better_than(&b.0) => Ok(a),
@@ -1134,13 +1126,8 @@ fn close_the_joints(
             let iterations = 2 * cfg.joints.max_iterations;
             let overlap = first_solved.joints.as_ref().and_then(|j| j.hub_lap);
             let again = best_of(iterations, overlap)?;
-            let (after, kept) = match &again {
-                Ok((s, d, _)) => (
-                    format!("{} (strips along {})", s.describe(), direction_name(*d)),
-                    s.better_than(score),
-                ),
-                Err(why) => (format!("failed ({})", why.join("; ")), false),
-            };
+            let after = outcome(&again);
+            let kept = matches!(&again, Ok((s, _, _)) if s.better_than(score));
             let verdict = if kept {
                 "kept"
             } else {
@@ -1175,6 +1162,15 @@ fn close_the_joints(
     again.layout = std::mem::take(&mut report.layout);
     *report = again;
     Ok((Ok((mesh, solved, joint_report)), notes))
+}
+
+/// How the best of the strip directions held, in words (the summary's rows): its score and
+/// direction, or why every direction failed.
+fn outcome(best: &std::result::Result<Kept, Vec<String>>) -> String {
+    match best {
+        Ok((s, d, _)) => format!("{} (strips along {})", s.describe(), direction_name(*d)),
+        Err(why) => format!("failed ({})", why.join("; ")),
+    }
 }
 
 fn direction_name(d: sv_strips::StripDirection) -> &'static str {
