@@ -7,7 +7,7 @@
 use std::collections::hash_map::Entry;
 use std::collections::{HashMap, HashSet};
 
-use sv_geom::{Contour, Segment, Vertex};
+use sv_geom::{planar, Contour, Segment, Vertex};
 
 use super::source::{Closed, Cut, Piece};
 
@@ -117,10 +117,6 @@ fn bounds(s: &Segment) -> ([f64; 2], [f64; 2]) {
     c.bounds().unwrap_or((s.start, s.start))
 }
 
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
-}
-
 /// A segment's carrier: the line (origin, unit direction) or the circle (centre, radius).
 enum Carrier {
     Line([f64; 2], [f64; 2]),
@@ -154,7 +150,7 @@ fn interval(c: &Carrier, s: &Segment, tol: f64) -> Option<(f64, f64)> {
             Some((a.min(b), a.max(b)))
         }
         (Carrier::Circle(c, r), Some((r2, c2))) => {
-            if dist(*c, c2) > tol || (r - r2).abs() > tol {
+            if planar::distance(*c, c2) > tol || (r - r2).abs() > tol {
                 return None;
             }
             let ang = |p: [f64; 2]| {
@@ -224,7 +220,10 @@ fn overlap_groups(pieces: &[Piece], tol: f64) -> (Vec<Vec<usize>>, usize) {
     let boxes: Vec<([f64; 2], [f64; 2])> =
         distinct.iter().map(|&i| bounds(&pieces[i].seg)).collect();
     let cell = {
-        let total: f64 = boxes.iter().map(|(lo, hi)| dist(*lo, *hi)).sum();
+        let total: f64 = boxes
+            .iter()
+            .map(|(lo, hi)| planar::distance(*lo, *hi))
+            .sum();
         (total / boxes.len().max(1) as f64).max(tol * 4.0)
     };
     let lanes: Vec<Lane> = distinct
@@ -458,7 +457,11 @@ fn drop_covered(
         .flat_map(|c| c.contour.segments().map(move |s| (s, c.src)))
         .collect();
     let boxes: Vec<([f64; 2], [f64; 2])> = segs.iter().map(|(s, _)| bounds(s)).collect();
-    let cell = (boxes.iter().map(|(lo, hi)| dist(*lo, *hi)).sum::<f64>() / boxes.len() as f64)
+    let cell = (boxes
+        .iter()
+        .map(|(lo, hi)| planar::distance(*lo, *hi))
+        .sum::<f64>()
+        / boxes.len() as f64)
         .max(tol * 4.0);
     let mut grid = Grid::new(cell);
     for (i, (lo, hi)) in boxes.iter().enumerate() {
@@ -578,7 +581,7 @@ fn join_ends(ends: &[[f64; 2]], tol: f64) -> Vec<usize> {
         }
         let p = ends[i];
         for j in grid.near([p[0] - tol, p[1] - tol], [p[0] + tol, p[1] + tol]) {
-            let d = dist(p, ends[j]);
+            let d = planar::distance(p, ends[j]);
             // a pair of loose ends once
             if j != i && d <= tol && (at[&j].0 != 1 || j > i) {
                 near.push((d, i.min(j), i.max(j)));
